@@ -103,7 +103,7 @@ struct FileHeader {
     std::uint64_t nodeCount;          ///< NodeRecords in the file
     std::uint64_t storedTriangles;    ///< PackedTriangles in the file (prototypes counted once)
     std::uint64_t instancedTriangles; ///< triangles as drawn (each instance counted)
-    std::array<std::uint8_t, 32> reserved;
+    std::array<std::uint8_t, 48> reserved;
 };
 static_assert(sizeof(FileHeader) == 160);
 
@@ -118,7 +118,7 @@ enum class NodeKind : std::uint8_t {
 
 enum NodeFlags : std::uint8_t {
     kNodeHasCube = 1u << 0,        ///< `cube` holds a baked color cube
-    kNodeOctreeChildren = 1u << 1, ///< children are octants of this cell (`octant` is valid)
+    kNodeOctreeChildren = 1u << 1, ///< children are octant cells of this cell (or instances in them)
 };
 
 /**
@@ -142,8 +142,6 @@ struct NodeRecord {
     std::uint32_t geometryPage;
     std::uint32_t geometryFirst;
     std::uint32_t geometryCount; ///< this node's own triangles (not its children's)
-    std::uint8_t octant;         ///< octant in the parent (bit0 x, bit1 y, bit2 z) if the parent is an octree cell
-    std::array<std::uint8_t, 3> reserved;
 };
 static_assert(sizeof(NodeRecord) == 96);
 

@@ -96,10 +96,12 @@ private:
 
 /** Returns the Status of `expr` from the enclosing function if it is an error. */
 #define FF_RETURN_IF_ERROR(expr)                                                                   \
+    FF_RETURN_IF_ERROR_IMPL(FF_STATUS_CONCAT(ffStatusTmp_, __LINE__), expr)
+#define FF_RETURN_IF_ERROR_IMPL(tmp, expr)                                                         \
     do {                                                                                           \
-        ::ff::Status ffStatusTmp_ = (expr);                                                        \
-        if (!ffStatusTmp_.isOk())                                                                  \
-            return ffStatusTmp_;                                                                   \
+        ::ff::Status tmp = (expr);                                                                 \
+        if (!tmp.isOk())                                                                           \
+            return tmp;                                                                            \
     } while (false)
 
 /** `FF_ASSIGN_OR_RETURN(auto x, makeX());` declares x from a Result or returns its Status. */

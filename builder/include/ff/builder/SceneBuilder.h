@@ -1,0 +1,126 @@
+#pragma once
+
+// The external-memory builder. Architecture, in the order build() runs it:
+//
+//   scan            sources push prototypes, triangles and instances through ISceneSink; the
+//                   triangles are validated (NaN, zero area: dropped and counted) and spilled to
+//                   one run file per prototype, so nothing is held whole.
+//   partition       per prototype: if it fits the memory budget it is one chunk; otherwise a
+//                   counting pass over its run file picks octree cells that fit (chunks) and a
+//                   distribution pass writes each chunk's triangles to a file of its own.
+//   buildHierarchy  each chunk is loaded, built into an octree (cost rule, large-triangle
+//                   tolerance) with color cubes, and encoded into treelet pages, on worker
+//                   threads; results are written in chunk order so the output is deterministic.
+//                   The cells above the chunks (and the large triangles that live there) form
+//                   the prototype's top tree. Then the instance level: an octree over instance
+//                   bounds whose leaves point at prototypes, with cubes baked from the
+//                   transformed prototype cubes.
+//   writePages      prototype, instance and metadata sections, header; fsync and rename.
+//
+// Memory: peak usage stays within BuildOptions::memoryBudgetBytes plus a small fixed overhead:
+// chunks are sized to (budget / worker threads), and spill buffers take a fixed share.
+
+#include <ff/builder/HierarchyParams.h>
+#include <ff/builder/SceneSink.h>
+#include <ff/storage/SceneFormat.h>
+#include <ff/storage/Status.h>
+
+#include <cstdint>
+#include <filesystem>
+#include <functional>
+#include <memory>
+#include <string>
+#include <vector>
+
+namespace ff::builder {
+
+/** Progress of a long phase, for a terminal progress bar. Called on the building thread. */
+struct BuildProgress {
+    std::string phase; ///< "scan", "partition", "hierarchy", "instances", "write"
+    std::uint64_t done = 0;
+    std::uint64_t total = 0; ///< 0 = unknown
+};
+
+struct BuildOptions {
+    std::uint64_t memoryBudgetBytes = 1ull << 30;
+    std::uint32_t pageSize = storage::kDefaultPageSize;
+    /** Worker threads for chunk building; 0 = hardware concurrency. */
+    unsigned threads = 0;
+    HierarchyParams hierarchy;
+    /** Where spill files go; empty = beside the output file. */
+    std::filesystem::path tempDirectory;
+    /** JSON object merged into the file's Metadata section (e.g. source, cameras). */
+    std::string metadataJson = "{}";
+    std::function<void(const BuildProgress&)> progress;
+};
+
+struct PhaseTime {
+    std::string phase;
+    double seconds = 0.0;
+};
+
+/** What a build did, for the JSON build report. */
+struct BuildReport {
+    std::uint64_t inputTriangles = 0;      ///< received by the sink
+    std::uint64_t droppedNonFinite = 0;    ///< NaN/Inf positions
+    std::uint64_t droppedDegenerate = 0;   ///< zero area
+    std::uint64_t storedTriangles = 0;     ///< in the file (prototypes once)
+    std::uint64_t instancedTriangles = 0;  ///< as drawn
+    std::uint32_t prototypes = 0;
+    std::uint32_t emptyPrototypes = 0;     ///< no triangle survived; their instances are dropped
+    std::uint64_t instances = 0;
+    std::uint64_t nodes = 0;
+    std::uint32_t maxDepth = 0;            ///< deepest prototype octree level
+    std::uint32_t instanceLevelDepth = 0;
+    std::uint64_t chunks = 0;
+    std::uint64_t nodePages = 0;
+    std::uint64_t geometryPages = 0;
+    std::uint64_t tablePages = 0;
+    std::uint64_t fileBytes = 0;
+    std::uint64_t nodeBytes = 0;
+    std::uint64_t geometryBytes = 0;
+    std::uint64_t tableBytes = 0;
+    std::uint64_t spillBytes = 0;          ///< written to temporary run files
+    std::uint64_t memoryBudgetBytes = 0;
+    std::uint64_t peakRssBytes = 0;        ///< VmHWM of the process at the end
+    std::uint32_t pageSize = 0;
+    unsigned threads = 0;
+    std::vector<PhaseTime> phases;
+};
+
+/** The report as a JSON object (stable keys, documented in README "build report"). */
+std::string buildReportJson(const BuildReport& report);
+
+/**
+ * Builds one scene file. Feed it through the ISceneSink interface, then call finish().
+ * Single-threaded API (it owns its worker threads internally).
+ */
+class SceneBuilder final : public ISceneSink {
+public:
+    /** Errors: InvalidArgument (page size, budget smaller than the minimum), IoError. */
+    [[nodiscard]] static Result<std::unique_ptr<SceneBuilder>> create(
+            const std::filesystem::path& outputPath, const BuildOptions& options);
+
+    ~SceneBuilder() override;
+    SceneBuilder(const SceneBuilder&) = delete;
+    SceneBuilder& operator=(const SceneBuilder&) = delete;
+
+    [[nodiscard]] Result<PrototypeId> addPrototype(std::string_view name) override;
+    [[nodiscard]] Status addTriangles(
+            PrototypeId prototype, std::span<const storage::PackedTriangle> triangles) override;
+    [[nodiscard]] Status addInstance(PrototypeId prototype, const glm::mat4& transform) override;
+
+    /** Runs partition, hierarchy and write; the file exists under its final name only if this
+     *  succeeds. Temporary files are removed either way. */
+    [[nodiscard]] Result<BuildReport> finish();
+
+    /** The smallest budget the builder accepts. */
+    static constexpr std::uint64_t kMinimumBudgetBytes = 16ull << 20;
+
+private:
+    struct Impl;
+    explicit SceneBuilder(std::unique_ptr<Impl> impl);
+    std::unique_ptr<Impl> mImpl;
+};
+
+} // namespace ff::builder

@@ -1,0 +1,365 @@
+#include "PrototypeBuilder.h"
+
+#include "SubtreeEncoder.h"
+
+#include <algorithm>
+#include <cmath>
+#include <future>
+#include <limits>
+#include <string>
+#include <unordered_map>
+
+namespace ff::builder {
+
+namespace {
+
+struct ChunkOutput {
+    EncodedSubtree encoded;
+    ColorCube rootCube;
+    glm::vec3 boundsMin{0.0f};
+    glm::vec3 boundsMax{0.0f};
+    PrototypeSummary summary;
+    std::uint64_t nodes = 0;
+    std::uint32_t maxDepth = 0;
+};
+
+/** A cell above the chunks of a partitioned prototype. */
+struct TopNode {
+    Cell cell;
+    int level = 0;
+    int octant = 0;
+    std::uint64_t key = 0; ///< Morton prefix of the cell at `level`
+    std::uint32_t firstChild = 0;
+    std::uint32_t childCount = 0;
+    std::int64_t chunk = -1; ///< index into the chunk list if this cell is a chunk
+    std::vector<storage::PackedTriangle> own; ///< large triangles that stop here
+};
+
+constexpr int kMaxCountLevel = 16;
+
+std::uint64_t spreadBits(std::uint64_t v) {
+    // Interleave 16 bits with two zero bits between each.
+    v &= 0xFFFF;
+    v = (v | (v << 32)) & 0x0000FFFF0000FFFFull; // not all steps are needed for 16 bits, but
+    v = (v | (v << 16)) & 0x00FF0000FF0000FFull; // these keep the classic masks recognisable
+    v = (v | (v << 8)) & 0xF00F00F00F00F00Full;
+    v = (v | (v << 4)) & 0x30C30C30C30C30C3ull;
+    v = (v | (v << 2)) & 0x9249249249249249ull;
+    return v;
+}
+
+/** Morton key of the level-`level` cell containing `p` (bit order per level: x, y, z). */
+std::uint64_t cellKey(const Cell& root, const glm::vec3& p, int level) {
+    const double cells = std::ldexp(1.0, level);
+    std::array<std::uint64_t, 3> index{};
+    for (int a = 0; a < 3; ++a) {
+        const double t = (static_cast<double>(p[a]) - root.min[a]) / root.size * cells;
+        index[static_cast<std::size_t>(a)] = static_cast<std::uint64_t>(std::clamp(t, 0.0, cells - 1.0));
+    }
+    return spreadBits(index[0]) | (spreadBits(index[1]) << 1) | (spreadBits(index[2]) << 2);
+}
+
+void addToSummary(const std::vector<BuildNode>& nodes, PrototypeSummary& summary) {
+    for (const BuildNode& node : nodes) {
+        if (node.external || node.level > PrototypeSummary::kDepth)
+            continue;
+        const bool leaf = node.childCount == 0;
+        const int last = leaf ? PrototypeSummary::kDepth : node.level;
+        for (int l = node.level; l <= last; ++l)
+            summary.cuts[static_cast<std::size_t>(l)].push_back({node.cellMin, node.cellMax, node.cube});
+    }
+}
+
+// Builds one chunk completely in memory. Runs on worker threads: touches only its arguments.
+ChunkOutput buildChunk(
+        std::vector<storage::PackedTriangle> triangles,
+        const Cell& cell,
+        int level,
+        int octant,
+        bool placeRoot,
+        const HierarchyParams& params,
+        std::uint32_t pageSize) {
+    CubeBaker baker(params.bakeResolution);
+    std::vector<BuildNode> nodes = buildOctree(triangles, cell, level, octant, params, baker);
+    ChunkOutput out;
+    out.rootCube = nodes[0].cube;
+    out.boundsMin = nodes[0].boundsMin;
+    out.boundsMax = nodes[0].boundsMax;
+    out.nodes = nodes.size();
+    addToSummary(nodes, out.summary);
+    out.encoded = encodeSubtree(std::move(nodes), std::move(triangles), pageSize, placeRoot);
+    out.maxDepth = out.encoded.maxLevel;
+    return out;
+}
+
+int chooseCountLevel(std::uint64_t triangles, std::uint64_t chunkTriangles) {
+    const double ratio = static_cast<double>(triangles) / static_cast<double>(std::max<std::uint64_t>(chunkTriangles, 1));
+    const int level = static_cast<int>(std::ceil(std::log(std::max(ratio, 1.0)) / std::log(8.0))) + 2;
+    return std::clamp(level, 1, kMaxCountLevel);
+}
+
+} // namespace
+
+PrototypeBuilder::PrototypeBuilder(
+        storage::SceneWriter& writer,
+        const HierarchyParams& params,
+        std::uint64_t chunkTriangles,
+        unsigned threads,
+        std::filesystem::path tempDirectory)
+    : mWriter(writer)
+    , mParams(params)
+    , mChunkTriangles(std::max<std::uint64_t>(chunkTriangles, 1024))
+    , mThreads(std::max(threads, 1u))
+    , mTempDirectory(std::move(tempDirectory)) {}
+
+Result<PrototypeBuildResult> PrototypeBuilder::build(
+        std::uint32_t prototypeId,
+        RunFile& triangles,
+        const glm::vec3& boundsMin,
+        const glm::vec3& boundsMax,
+        std::uint64_t& spillBytes) {
+    // The root cell is a cube around the bounds, a hair larger so no centroid sits on its max face.
+    const glm::vec3 size = boundsMax - boundsMin;
+    const float edge = std::max({size.x, size.y, size.z});
+    const float padded = edge * (1.0f + 1e-5f) + std::numeric_limits<float>::min();
+    const Cell root{boundsMin, padded};
+
+    Result<PrototypeBuildResult> result = triangles.count() <= mChunkTriangles
+            ? buildInMemory(triangles, root)
+            : buildChunked(prototypeId, triangles, root, spillBytes);
+    if (!result)
+        return result.status().withContext("prototype " + std::to_string(prototypeId));
+    result->record.triangleCount = triangles.count();
+    result->summary.rootCellSize = padded;
+    return result;
+}
+
+Result<PrototypeBuildResult> PrototypeBuilder::buildInMemory(RunFile& triangles, const Cell& root) {
+    FF_ASSIGN_OR_RETURN(std::vector<storage::PackedTriangle> all, triangles.readAll());
+    triangles.remove();
+    ChunkOutput chunk = buildChunk(std::move(all), root, 0, 0, true, mParams, mWriter.pageSize());
+    PrototypeBuildResult result;
+    result.geometryPages = chunk.encoded.geometryPageCount(mWriter.pageSize());
+    result.nodePages = chunk.encoded.nodePages.size();
+    FF_RETURN_IF_ERROR(commitSubtree(mWriter, chunk.encoded).status());
+    result.record.root = *chunk.encoded.rootRef;
+    result.record.boundsMin = {chunk.boundsMin.x, chunk.boundsMin.y, chunk.boundsMin.z};
+    result.record.boundsMax = {chunk.boundsMax.x, chunk.boundsMax.y, chunk.boundsMax.z};
+    result.record.nodeCount = chunk.nodes;
+    result.summary = std::move(chunk.summary);
+    result.nodes = chunk.nodes;
+    result.maxDepth = chunk.maxDepth;
+    result.chunks = 1;
+    return result;
+}
+
+Result<PrototypeBuildResult> PrototypeBuilder::buildChunked(
+        std::uint32_t prototypeId, RunFile& triangles, const Cell& root, std::uint64_t& spillBytes) {
+    // ---- count: triangles per cell at a level fine enough that cells fit a chunk -----------
+    const int countLevel = chooseCountLevel(triangles.count(), mChunkTriangles);
+    std::vector<std::unordered_map<std::uint64_t, std::uint64_t>> counts(static_cast<std::size_t>(countLevel + 1));
+    FF_RETURN_IF_ERROR(triangles.forEachBatch(1u << 15, [&](std::span<const storage::PackedTriangle> batch) {
+        for (const storage::PackedTriangle& t : batch)
+            ++counts[static_cast<std::size_t>(countLevel)][cellKey(root, centroid(t), countLevel)];
+        return Status::ok();
+    }));
+    for (int l = countLevel - 1; l >= 0; --l)
+        for (const auto& [key, count] : counts[static_cast<std::size_t>(l + 1)])
+            counts[static_cast<std::size_t>(l)][key >> 3] += count;
+
+    // ---- select chunks top-down: the largest cells that fit ---------------------------------
+    std::vector<TopNode> top;
+    std::vector<std::uint32_t> chunkNodes; // top-node index of each chunk, in Morton order
+    top.emplace_back();
+    top[0].cell = root;
+    Status selectStatus = Status::ok();
+    auto select = [&](auto&& self, std::uint32_t index) -> void {
+        const TopNode node = {top[index].cell, top[index].level, top[index].octant, top[index].key, 0, 0, -1, {}};
+        const std::uint64_t count = counts[static_cast<std::size_t>(node.level)][node.key];
+        if (count <= mChunkTriangles) {
+            top[index].chunk = static_cast<std::int64_t>(chunkNodes.size());
+            chunkNodes.push_back(index);
+            return;
+        }
+        if (node.level == countLevel) {
+            selectStatus = Status(
+                    ErrorCode::OutOfBudget,
+                    "a cell of " + std::to_string(count) + " triangles at octree level " + std::to_string(node.level) +
+                            " does not fit the per-chunk budget of " + std::to_string(mChunkTriangles) +
+                            " triangles; raise --memory-budget");
+            return;
+        }
+        std::vector<int> octants;
+        for (int o = 0; o < 8; ++o)
+            if (counts[static_cast<std::size_t>(node.level + 1)].count((node.key << 3) | static_cast<std::uint64_t>(o)))
+                octants.push_back(o);
+        const auto first = static_cast<std::uint32_t>(top.size());
+        top[index].firstChild = first;
+        top[index].childCount = static_cast<std::uint32_t>(octants.size());
+        for (int o : octants) {
+            TopNode child;
+            child.cell = node.cell.octantCell(o);
+            child.level = node.level + 1;
+            child.octant = o;
+            child.key = (node.key << 3) | static_cast<std::uint64_t>(o);
+            top.push_back(std::move(child));
+        }
+        for (std::uint32_t c = 0; c < octants.size() && selectStatus.isOk(); ++c)
+            self(self, first + c);
+    };
+    select(select, 0);
+    FF_RETURN_IF_ERROR(selectStatus);
+    counts.clear();
+
+    // ---- distribute: each triangle to its chunk's run file, or to the top cell it stops at --
+    std::vector<RunFile> chunkFiles;
+    chunkFiles.reserve(chunkNodes.size());
+    const std::size_t bufferBytes = std::clamp<std::size_t>(
+            static_cast<std::size_t>(mChunkTriangles * sizeof(storage::PackedTriangle) / 4 / std::max<std::size_t>(chunkNodes.size(), 1)),
+            4096,
+            1u << 20);
+    for (std::size_t c = 0; c < chunkNodes.size(); ++c) {
+        chunkFiles.emplace_back(mTempDirectory / ("proto" + std::to_string(prototypeId) + "-chunk" + std::to_string(c) + ".run"));
+        chunkFiles.back().setBufferLimit(bufferBytes);
+    }
+    std::uint64_t topTriangles = 0;
+    FF_RETURN_IF_ERROR(triangles.forEachBatch(1u << 15, [&](std::span<const storage::PackedTriangle> batch) -> Status {
+        for (const storage::PackedTriangle& t : batch) {
+            const std::uint64_t key = cellKey(root, centroid(t), countLevel);
+            const float size = extent(t);
+            std::uint32_t index = 0;
+            while (true) {
+                TopNode& node = top[index];
+                if (size > mParams.largeTriangleTolerance * node.cell.size) {
+                    node.own.push_back(t);
+                    if (++topTriangles > mChunkTriangles)
+                        return Status(ErrorCode::OutOfBudget, "too many large triangles above the chunk level; raise --memory-budget");
+                    break;
+                }
+                if (node.chunk >= 0) {
+                    FF_RETURN_IF_ERROR(chunkFiles[static_cast<std::size_t>(node.chunk)].append(std::span(&t, 1)));
+                    break;
+                }
+                const auto octant = static_cast<int>((key >> (3 * (countLevel - node.level - 1))) & 7u);
+                std::uint32_t next = 0;
+                for (std::uint32_t c = 0; c < node.childCount; ++c)
+                    if (top[node.firstChild + c].octant == octant)
+                        next = node.firstChild + c;
+                FF_ASSERT(next != 0); // every counted cell has a path
+                index = next;
+            }
+        }
+        return Status::ok();
+    }));
+    spillBytes += triangles.bytesWritten();
+    triangles.remove();
+    for (RunFile& file : chunkFiles) {
+        FF_RETURN_IF_ERROR(file.flush());
+        spillBytes += file.bytesWritten();
+    }
+
+    // ---- build chunks on worker threads, commit in chunk order (deterministic output) -------
+    PrototypeBuildResult result;
+    result.chunks = chunkNodes.size();
+    std::vector<ChunkOutput> finished(chunkNodes.size());
+    for (std::size_t begin = 0; begin < chunkNodes.size(); begin += mThreads) {
+        const std::size_t end = std::min<std::size_t>(begin + mThreads, chunkNodes.size());
+        std::vector<std::future<Result<ChunkOutput>>> running;
+        for (std::size_t c = begin; c < end; ++c) {
+            const TopNode& node = top[chunkNodes[c]];
+            RunFile* file = &chunkFiles[c];
+            const Cell cell = node.cell;
+            const int level = node.level;
+            const int octant = node.octant;
+            const HierarchyParams params = mParams;
+            const std::uint32_t pageSize = mWriter.pageSize();
+            running.push_back(std::async(std::launch::async, [file, cell, level, octant, params, pageSize]() -> Result<ChunkOutput> {
+                FF_ASSIGN_OR_RETURN(std::vector<storage::PackedTriangle> chunkTriangles, file->readAll());
+                file->remove();
+                return buildChunk(std::move(chunkTriangles), cell, level, octant, false, params, pageSize);
+            }));
+        }
+        for (std::size_t c = begin; c < end; ++c) {
+            Result<ChunkOutput> chunk = running[c - begin].get();
+            if (!chunk)
+                return chunk.status();
+            result.geometryPages += chunk->encoded.geometryPageCount(mWriter.pageSize());
+            result.nodePages += chunk->encoded.nodePages.size();
+            FF_ASSIGN_OR_RETURN(storage::NodeRecord rootRecord, commitSubtree(mWriter, chunk->encoded));
+            chunk->encoded.root = rootRecord;
+            result.nodes += chunk->nodes;
+            result.maxDepth = std::max(result.maxDepth, chunk->maxDepth);
+            for (std::size_t l = 0; l < chunk->summary.cuts.size(); ++l) {
+                auto& cut = result.summary.cuts[l];
+                cut.insert(cut.end(), chunk->summary.cuts[l].begin(), chunk->summary.cuts[l].end());
+            }
+            chunk->summary = {};
+            finished[c] = std::move(chunk.value());
+        }
+    }
+
+    // ---- the top tree: cells above the chunks, composited from them --------------------------
+    std::vector<BuildNode> nodes(top.size());
+    std::vector<storage::PackedTriangle> ownTriangles;
+    ownTriangles.reserve(topTriangles);
+    for (std::size_t i = 0; i < top.size(); ++i) {
+        TopNode& t = top[i];
+        BuildNode& n = nodes[i];
+        n.cellMin = t.cell.min;
+        n.cellMax = t.cell.max();
+        n.level = static_cast<std::uint8_t>(t.level);
+        n.octant = static_cast<std::uint8_t>(t.octant);
+        n.firstChild = t.firstChild;
+        n.childCount = t.childCount;
+        n.octreeChildren = t.childCount > 0;
+        n.firstTriangle = ownTriangles.size();
+        n.triangleCount = t.own.size();
+        ownTriangles.insert(ownTriangles.end(), t.own.begin(), t.own.end());
+        t.own = {};
+        if (t.chunk >= 0) {
+            const ChunkOutput& chunk = finished[static_cast<std::size_t>(t.chunk)];
+            n.external = chunk.encoded.root;
+            n.cube = chunk.rootCube;
+            n.boundsMin = chunk.boundsMin;
+            n.boundsMax = chunk.boundsMax;
+        }
+    }
+    // Children come after their parents in `top`, so a reverse sweep is a post-order.
+    CubeBaker baker(mParams.bakeResolution);
+    for (std::size_t r = top.size(); r-- > 0;) {
+        BuildNode& n = nodes[r];
+        if (n.external)
+            continue;
+        n.boundsMin = glm::vec3(std::numeric_limits<float>::infinity());
+        n.boundsMax = glm::vec3(-std::numeric_limits<float>::infinity());
+        const auto own = std::span(ownTriangles).subspan(n.firstTriangle, n.triangleCount);
+        for (const storage::PackedTriangle& t : own)
+            growBounds(n.boundsMin, n.boundsMax, t);
+        std::array<const ColorCube*, 8> children{};
+        for (std::uint32_t c = 0; c < n.childCount; ++c) {
+            const BuildNode& child = nodes[n.firstChild + c];
+            children[child.octant] = &child.cube;
+            n.boundsMin = glm::min(n.boundsMin, child.boundsMin);
+            n.boundsMax = glm::max(n.boundsMax, child.boundsMax);
+        }
+        baker.reset(n.cellMin, n.cellMax);
+        baker.addTriangles(own);
+        const QuadrantColors underlay = compositeOctantQuadrants(children);
+        n.cube = baker.finish(&underlay);
+    }
+    addToSummary(nodes, result.summary);
+    const glm::vec3 boundsMin = nodes[0].boundsMin;
+    const glm::vec3 boundsMax = nodes[0].boundsMax;
+    EncodedSubtree encoded = encodeSubtree(std::move(nodes), std::move(ownTriangles), mWriter.pageSize(), true);
+    result.geometryPages += encoded.geometryPageCount(mWriter.pageSize());
+    result.nodePages += encoded.nodePages.size();
+    result.nodes += encoded.nodeCount - result.chunks; // chunk roots were counted with their chunks
+    FF_RETURN_IF_ERROR(commitSubtree(mWriter, encoded).status());
+    result.record.root = *encoded.rootRef;
+    result.record.boundsMin = {boundsMin.x, boundsMin.y, boundsMin.z};
+    result.record.boundsMax = {boundsMax.x, boundsMax.y, boundsMax.z};
+    result.record.nodeCount = result.nodes;
+    return result;
+}
+
+} // namespace ff::builder

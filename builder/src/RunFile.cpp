@@ -1,0 +1,143 @@
+#include "RunFile.h"
+
+#include <cerrno>
+#include <cstring>
+#include <fcntl.h>
+#include <unistd.h>
+
+namespace ff::builder {
+
+namespace {
+
+class FileDescriptor {
+public:
+    explicit FileDescriptor(int fd) : mFd(fd) {}
+    ~FileDescriptor() {
+        if (mFd >= 0)
+            ::close(mFd);
+    }
+    FileDescriptor(const FileDescriptor&) = delete;
+    FileDescriptor& operator=(const FileDescriptor&) = delete;
+    int get() const { return mFd; }
+    int release() {
+        const int fd = mFd;
+        mFd = -1;
+        return fd;
+    }
+
+private:
+    int mFd;
+};
+
+Status writeAll(int fd, const std::byte* data, std::size_t size, const std::filesystem::path& path) {
+    while (size > 0) {
+        const ssize_t n = ::write(fd, data, size);
+        if (n < 0) {
+            if (errno == EINTR)
+                continue;
+            return ioStatus(errno, "cannot write", path);
+        }
+        data += n;
+        size -= static_cast<std::size_t>(n);
+    }
+    return Status::ok();
+}
+
+} // namespace
+
+Status ioStatus(int error, const std::string& what, const std::filesystem::path& path) {
+    const ErrorCode code = (error == ENOSPC || error == EDQUOT) ? ErrorCode::DiskFull : ErrorCode::IoError;
+    return {code, what + " " + path.string() + ": " + std::strerror(error)};
+}
+
+RunFile::RunFile(std::filesystem::path path) : mPath(std::move(path)) {}
+
+RunFile::~RunFile() { remove(); }
+
+RunFile::RunFile(RunFile&& other) noexcept
+    : mPath(std::move(other.mPath))
+    , mBuffer(std::move(other.mBuffer))
+    , mBufferLimitBytes(other.mBufferLimitBytes)
+    , mCount(other.mCount)
+    , mBytesWritten(other.mBytesWritten)
+    , mCreated(other.mCreated) {
+    other.mCreated = false;
+    other.mPath.clear();
+}
+
+Status RunFile::append(std::span<const storage::PackedTriangle> triangles) {
+    mBuffer.insert(mBuffer.end(), triangles.begin(), triangles.end());
+    mCount += triangles.size();
+    if (bufferedBytes() >= mBufferLimitBytes)
+        return flush();
+    return Status::ok();
+}
+
+Status RunFile::flush() {
+    if (mBuffer.empty() && mCreated)
+        return Status::ok();
+    const int flags = O_WRONLY | O_CREAT | O_CLOEXEC | (mCreated ? O_APPEND : O_TRUNC);
+    FileDescriptor fd(::open(mPath.c_str(), flags, 0600));
+    if (fd.get() < 0)
+        return ioStatus(errno, "cannot open run file", mPath);
+    mCreated = true;
+    const auto bytes = std::as_bytes(std::span(mBuffer));
+    FF_RETURN_IF_ERROR(writeAll(fd.get(), bytes.data(), bytes.size(), mPath));
+    if (::close(fd.release()) != 0)
+        return ioStatus(errno, "cannot close", mPath);
+    mBytesWritten += bytes.size();
+    mBuffer.clear();
+    mBuffer.shrink_to_fit(); // idle run files should not pin their peak buffer
+    return Status::ok();
+}
+
+Status RunFile::forEachBatch(
+        std::size_t batchSize,
+        const std::function<Status(std::span<const storage::PackedTriangle>)>& visit) {
+    FF_RETURN_IF_ERROR(flush());
+    FileDescriptor fd(::open(mPath.c_str(), O_RDONLY | O_CLOEXEC));
+    if (fd.get() < 0)
+        return ioStatus(errno, "cannot open run file", mPath);
+    std::vector<storage::PackedTriangle> batch(std::max<std::size_t>(batchSize, 1));
+    std::uint64_t remaining = mCount;
+    while (remaining > 0) {
+        const std::size_t want = static_cast<std::size_t>(std::min<std::uint64_t>(remaining, batch.size()));
+        auto* out = reinterpret_cast<char*>(batch.data());
+        std::size_t bytes = want * sizeof(storage::PackedTriangle);
+        while (bytes > 0) {
+            const ssize_t n = ::read(fd.get(), out, bytes);
+            if (n < 0 && errno == EINTR)
+                continue;
+            if (n < 0)
+                return ioStatus(errno, "cannot read run file", mPath);
+            if (n == 0)
+                return Status(ErrorCode::IoError, "run file " + mPath.string() + " is shorter than written");
+            out += n;
+            bytes -= static_cast<std::size_t>(n);
+        }
+        FF_RETURN_IF_ERROR(visit(std::span(batch.data(), want)));
+        remaining -= want;
+    }
+    return Status::ok();
+}
+
+Result<std::vector<storage::PackedTriangle>> RunFile::readAll() {
+    std::vector<storage::PackedTriangle> all;
+    all.reserve(static_cast<std::size_t>(mCount));
+    FF_RETURN_IF_ERROR(forEachBatch(1u << 16, [&all](std::span<const storage::PackedTriangle> batch) {
+        all.insert(all.end(), batch.begin(), batch.end());
+        return Status::ok();
+    }));
+    return all;
+}
+
+void RunFile::remove() noexcept {
+    if (mCreated && !mPath.empty())
+        ::unlink(mPath.c_str());
+    mCreated = false;
+    mBuffer.clear();
+    mBuffer.shrink_to_fit();
+    mCount = 0;
+}
+
+} // namespace ff::builder

@@ -1,0 +1,355 @@
+#include <ff/builder/SceneBuilder.h>
+
+#include "InstanceLevel.h"
+#include "PrototypeBuilder.h"
+#include "RunFile.h"
+
+#include <ff/storage/SceneWriter.h>
+
+#include <nlohmann/json.hpp>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <fstream>
+#include <limits>
+#include <string>
+#include <thread>
+#include <unistd.h>
+
+namespace ff::builder {
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+bool isFinite(const storage::PackedTriangle& t) {
+    for (const storage::PackedVertex& v : t.vertices)
+        for (float c : v.position)
+            if (!std::isfinite(c))
+                return false;
+    return true;
+}
+
+bool hasArea(const storage::PackedTriangle& t) {
+    const glm::dvec3 a(t.vertices[0].position[0], t.vertices[0].position[1], t.vertices[0].position[2]);
+    const glm::dvec3 b(t.vertices[1].position[0], t.vertices[1].position[1], t.vertices[1].position[2]);
+    const glm::dvec3 c(t.vertices[2].position[0], t.vertices[2].position[1], t.vertices[2].position[2]);
+    const glm::dvec3 n = glm::cross(b - a, c - a);
+    return glm::dot(n, n) > 0.0;
+}
+
+std::uint64_t peakRssBytes() {
+    std::ifstream status("/proc/self/status");
+    std::string line;
+    while (std::getline(status, line)) {
+        if (line.rfind("VmHWM:", 0) == 0)
+            return std::stoull(line.substr(6)) * 1024; // reported in kB
+    }
+    return 0;
+}
+
+struct PrototypeState {
+    std::string name;
+    RunFile run;
+    glm::vec3 boundsMin{std::numeric_limits<float>::infinity()};
+    glm::vec3 boundsMax{-std::numeric_limits<float>::infinity()};
+};
+
+} // namespace
+
+struct SceneBuilder::Impl {
+    std::filesystem::path outputPath;
+    BuildOptions options;
+    std::filesystem::path tempDirectory;
+    std::unique_ptr<storage::SceneWriter> writer;
+    std::vector<std::unique_ptr<PrototypeState>> prototypes;
+    std::vector<std::pair<PrototypeId, glm::mat4>> instances;
+    BuildReport report;
+    std::size_t spillBufferLimit = 0; ///< total bytes all run files may buffer
+    std::size_t spillBuffered = 0;
+    Clock::time_point scanStart = Clock::now();
+    bool finished = false;
+
+    Status spill(PrototypeState& proto, std::span<const storage::PackedTriangle> triangles);
+    void progress(const char* phase, std::uint64_t done, std::uint64_t total) const {
+        if (options.progress)
+            options.progress({phase, done, total});
+    }
+};
+
+SceneBuilder::SceneBuilder(std::unique_ptr<Impl> impl) : mImpl(std::move(impl)) {}
+SceneBuilder::~SceneBuilder() = default;
+
+Result<std::unique_ptr<SceneBuilder>> SceneBuilder::create(
+        const std::filesystem::path& outputPath, const BuildOptions& options) {
+    if (options.memoryBudgetBytes < kMinimumBudgetBytes)
+        return Status(
+                ErrorCode::InvalidArgument,
+                "--memory-budget " + std::to_string(options.memoryBudgetBytes >> 20) + " MiB is below the minimum of " +
+                        std::to_string(kMinimumBudgetBytes >> 20) + " MiB");
+    if (!storage::isValidPageSize(options.pageSize))
+        return Status(ErrorCode::InvalidArgument, "page size must be a power of two between 4 KiB and 16 MiB");
+    if (options.hierarchy.bakeResolution < 2 || options.hierarchy.bakeResolution > 64)
+        return Status(ErrorCode::InvalidArgument, "bake resolution must be between 2 and 64");
+    if (!(options.hierarchy.cubeCost > 0.0f) || !(options.hierarchy.largeTriangleTolerance > 0.0f))
+        return Status(ErrorCode::InvalidArgument, "cube cost and large-triangle tolerance must be positive");
+
+    auto impl = std::make_unique<Impl>();
+    impl->outputPath = outputPath;
+    impl->options = options;
+    if (impl->options.threads == 0)
+        impl->options.threads = std::max(1u, std::thread::hardware_concurrency());
+    std::filesystem::path parent = outputPath.parent_path();
+    if (parent.empty())
+        parent = ".";
+    const std::filesystem::path tempRoot = options.tempDirectory.empty() ? parent : options.tempDirectory;
+    impl->tempDirectory = tempRoot / (".farfield-build-" + std::to_string(::getpid()));
+    std::error_code ec;
+    std::filesystem::create_directories(impl->tempDirectory, ec);
+    if (ec)
+        return Status(ErrorCode::IoError, "cannot create temporary directory " + impl->tempDirectory.string() + ": " + ec.message());
+    storage::SceneWriterOptions writerOptions;
+    writerOptions.pageSize = options.pageSize;
+    FF_ASSIGN_OR_RETURN(impl->writer, storage::SceneWriter::create(outputPath, writerOptions));
+    impl->spillBufferLimit = static_cast<std::size_t>(options.memoryBudgetBytes / 8);
+    impl->report.memoryBudgetBytes = options.memoryBudgetBytes;
+    impl->report.pageSize = options.pageSize;
+    impl->report.threads = impl->options.threads;
+    return std::unique_ptr<SceneBuilder>(new SceneBuilder(std::move(impl)));
+}
+
+Result<PrototypeId> SceneBuilder::addPrototype(std::string_view name) {
+    const auto id = static_cast<PrototypeId>(mImpl->prototypes.size());
+    auto state = std::make_unique<PrototypeState>(PrototypeState{
+            std::string(name), RunFile(mImpl->tempDirectory / ("proto" + std::to_string(id) + ".run")), {}, {}});
+    state->boundsMin = glm::vec3(std::numeric_limits<float>::infinity());
+    state->boundsMax = glm::vec3(-std::numeric_limits<float>::infinity());
+    mImpl->prototypes.push_back(std::move(state));
+    return id;
+}
+
+Status SceneBuilder::addTriangles(PrototypeId prototype, std::span<const storage::PackedTriangle> triangles) {
+    if (prototype >= mImpl->prototypes.size())
+        return Status(ErrorCode::InvalidArgument, "unknown prototype " + std::to_string(prototype));
+    return mImpl->spill(*mImpl->prototypes[prototype], triangles);
+}
+
+Status SceneBuilder::Impl::spill(PrototypeState& proto, std::span<const storage::PackedTriangle> triangles) {
+    report.inputTriangles += triangles.size();
+    // Keep runs of valid triangles together so the common case appends whole batches.
+    std::size_t runBegin = 0;
+    auto flushRun = [&](std::size_t runEnd) -> Status {
+        if (runEnd > runBegin) {
+            const auto run = triangles.subspan(runBegin, runEnd - runBegin);
+            for (const storage::PackedTriangle& t : run)
+                for (const storage::PackedVertex& v : t.vertices) {
+                    proto.boundsMin = glm::min(proto.boundsMin, glm::vec3(v.position[0], v.position[1], v.position[2]));
+                    proto.boundsMax = glm::max(proto.boundsMax, glm::vec3(v.position[0], v.position[1], v.position[2]));
+                }
+            FF_RETURN_IF_ERROR(proto.run.append(run));
+            spillBuffered += run.size_bytes(); // an over-estimate once a run flushes itself
+        }
+        return Status::ok();
+    };
+    for (std::size_t i = 0; i < triangles.size(); ++i) {
+        const storage::PackedTriangle& t = triangles[i];
+        const bool finite = isFinite(t);
+        if (finite && hasArea(t))
+            continue;
+        FF_RETURN_IF_ERROR(flushRun(i));
+        runBegin = i + 1;
+        if (!finite)
+            ++report.droppedNonFinite;
+        else
+            ++report.droppedDegenerate;
+    }
+    FF_RETURN_IF_ERROR(flushRun(triangles.size()));
+    if (spillBuffered > spillBufferLimit) {
+        for (auto& p : prototypes)
+            FF_RETURN_IF_ERROR(p->run.flush());
+        spillBuffered = 0;
+    }
+    return Status::ok();
+}
+
+Status SceneBuilder::addInstance(PrototypeId prototype, const glm::mat4& transform) {
+    if (prototype >= mImpl->prototypes.size())
+        return Status(ErrorCode::InvalidArgument, "unknown prototype " + std::to_string(prototype));
+    for (int c = 0; c < 4; ++c)
+        for (int r = 0; r < 4; ++r)
+            if (!std::isfinite(transform[c][r]))
+                return Status(ErrorCode::InvalidInput, "instance of prototype " + std::to_string(prototype) + ": transform is not finite");
+    mImpl->instances.emplace_back(prototype, transform);
+    return Status::ok();
+}
+
+Result<BuildReport> SceneBuilder::finish() {
+    Impl& s = *mImpl;
+    if (s.finished)
+        return Status(ErrorCode::InvalidArgument, "finish() called twice");
+    s.finished = true;
+    BuildReport& report = s.report;
+    auto phaseEnd = [&report](const char* name, Clock::time_point start) {
+        report.phases.push_back({name, std::chrono::duration<double>(Clock::now() - start).count()});
+        return Clock::now();
+    };
+    Clock::time_point start = phaseEnd("scan", s.scanStart);
+    auto cleanup = [&s]() {
+        s.prototypes.clear();
+        std::error_code ec;
+        std::filesystem::remove_all(s.tempDirectory, ec);
+    };
+    struct CleanupGuard {
+        decltype(cleanup)& fn;
+        ~CleanupGuard() { fn(); }
+    } guard{cleanup};
+
+    // ---- partition + buildHierarchy, one prototype at a time ---------------------------------
+    const std::uint64_t fixedReserve = std::min<std::uint64_t>(s.options.memoryBudgetBytes / 4, 64ull << 20);
+    const std::uint64_t chunkBudget = (s.options.memoryBudgetBytes - fixedReserve) / s.options.threads;
+    const std::uint64_t chunkTriangles = chunkBudget / kChunkBytesPerTriangle;
+    PrototypeBuilder protoBuilder(*s.writer, s.options.hierarchy, chunkTriangles, s.options.threads, s.tempDirectory);
+    std::vector<storage::PrototypeRecord> protoRecords(s.prototypes.size());
+    std::vector<PrototypeSummary> summaries(s.prototypes.size());
+    std::vector<bool> empty(s.prototypes.size(), false);
+    for (std::size_t p = 0; p < s.prototypes.size(); ++p) {
+        s.progress("hierarchy", p, s.prototypes.size());
+        PrototypeState& proto = *s.prototypes[p];
+        if (proto.run.count() == 0) {
+            empty[p] = true;
+            ++report.emptyPrototypes;
+            continue;
+        }
+        report.spillBytes += proto.run.bytesWritten();
+        FF_ASSIGN_OR_RETURN(
+                PrototypeBuildResult built,
+                protoBuilder.build(static_cast<std::uint32_t>(p), proto.run, proto.boundsMin, proto.boundsMax, report.spillBytes));
+        protoRecords[p] = built.record;
+        summaries[p] = std::move(built.summary);
+        report.storedTriangles += built.record.triangleCount;
+        report.nodes += built.nodes;
+        report.maxDepth = std::max(report.maxDepth, built.maxDepth);
+        report.chunks += built.chunks;
+        report.geometryPages += built.geometryPages;
+        report.nodePages += built.nodePages;
+    }
+    report.prototypes = static_cast<std::uint32_t>(s.prototypes.size());
+    s.progress("hierarchy", s.prototypes.size(), s.prototypes.size());
+    start = phaseEnd("hierarchy", start);
+
+    // ---- instance level -----------------------------------------------------------------------
+    std::vector<storage::InstanceRecord> instanceRecords;
+    instanceRecords.reserve(s.instances.size());
+    for (const auto& [prototype, transform] : s.instances) {
+        if (empty[prototype])
+            continue;
+        storage::InstanceRecord record{};
+        record.transform = toRowMajor3x4(transform);
+        record.prototype = prototype;
+        instanceRecords.push_back(record);
+        report.instancedTriangles += protoRecords[prototype].triangleCount;
+    }
+    report.instances = instanceRecords.size();
+    s.progress("instances", 0, 1);
+    FF_ASSIGN_OR_RETURN(
+            InstanceLevelResult level,
+            buildInstanceLevel(*s.writer, instanceRecords, protoRecords, summaries, s.options.hierarchy));
+    report.nodes += level.nodes;
+    report.nodePages += level.nodePages;
+    report.instanceLevelDepth = level.depth;
+    start = phaseEnd("instances", start);
+
+    // ---- write: tables, metadata, header -----------------------------------------------------
+    s.progress("write", 0, 1);
+    std::vector<storage::SectionEntry> sections;
+    const std::uint64_t tableStart = s.writer->nextPageIndex();
+    FF_ASSIGN_OR_RETURN(
+            storage::SectionEntry protoSection,
+            s.writer->appendSection(storage::SectionType::Prototypes, std::as_bytes(std::span(protoRecords)), protoRecords.size()));
+    sections.push_back(protoSection);
+    FF_ASSIGN_OR_RETURN(
+            storage::SectionEntry instanceSection,
+            s.writer->appendSection(storage::SectionType::Instances, std::as_bytes(std::span(instanceRecords)), instanceRecords.size()));
+    sections.push_back(instanceSection);
+
+    nlohmann::json metadata = nlohmann::json::parse(s.options.metadataJson, nullptr, false);
+    if (!metadata.is_object())
+        metadata = nlohmann::json::object();
+    nlohmann::json names = nlohmann::json::array();
+    for (const auto& proto : s.prototypes)
+        names.push_back(proto ? proto->name : std::string());
+    metadata["prototypeNames"] = names;
+    report.peakRssBytes = peakRssBytes();
+    metadata["build"] = nlohmann::json::parse(buildReportJson(report));
+    const std::string metadataText = metadata.dump();
+    FF_ASSIGN_OR_RETURN(
+            storage::SectionEntry metadataSection,
+            s.writer->appendSection(storage::SectionType::Metadata, std::as_bytes(std::span(metadataText)), 1));
+    sections.push_back(metadataSection);
+    storage::SectionEntry hierarchy{};
+    hierarchy.type = static_cast<std::uint32_t>(storage::SectionType::Hierarchy);
+    hierarchy.firstPage = 1;
+    hierarchy.pageCount = tableStart - 1;
+    sections.push_back(hierarchy);
+    report.tablePages = s.writer->nextPageIndex() - tableStart;
+
+    storage::FileHeader header{};
+    header.root = level.root;
+    header.boundsMin = {level.boundsMin.x, level.boundsMin.y, level.boundsMin.z};
+    header.boundsMax = {level.boundsMax.x, level.boundsMax.y, level.boundsMax.z};
+    header.nodeCount = report.nodes;
+    header.storedTriangles = report.storedTriangles;
+    header.instancedTriangles = report.instancedTriangles;
+    const std::uint64_t pageCount = s.writer->nextPageIndex();
+    FF_RETURN_IF_ERROR(s.writer->commit(header, sections));
+    phaseEnd("write", start);
+    s.progress("write", 1, 1);
+
+    const std::uint64_t page = s.options.pageSize;
+    report.fileBytes = pageCount * page;
+    report.nodeBytes = report.nodePages * page;
+    report.geometryBytes = report.geometryPages * page;
+    report.tableBytes = report.tablePages * page;
+    report.peakRssBytes = peakRssBytes();
+    return report;
+}
+
+std::string buildReportJson(const BuildReport& r) {
+    nlohmann::json phases = nlohmann::json::object();
+    double total = 0.0;
+    for (const PhaseTime& p : r.phases) {
+        phases[p.phase] = p.seconds;
+        total += p.seconds;
+    }
+    nlohmann::json j = {
+            {"input_triangles", r.inputTriangles},
+            {"dropped_non_finite_triangles", r.droppedNonFinite},
+            {"dropped_degenerate_triangles", r.droppedDegenerate},
+            {"stored_triangles", r.storedTriangles},
+            {"instanced_triangles", r.instancedTriangles},
+            {"prototypes", r.prototypes},
+            {"empty_prototypes", r.emptyPrototypes},
+            {"instances", r.instances},
+            {"nodes", r.nodes},
+            {"depth", r.maxDepth},
+            {"instance_level_depth", r.instanceLevelDepth},
+            {"chunks", r.chunks},
+            {"page_size", r.pageSize},
+            {"threads", r.threads},
+            {"bytes",
+             {{"file", r.fileBytes},
+              {"nodes", r.nodeBytes},
+              {"geometry", r.geometryBytes},
+              {"tables", r.tableBytes},
+              {"spill", r.spillBytes}}},
+            {"pages", {{"nodes", r.nodePages}, {"geometry", r.geometryPages}, {"tables", r.tablePages}}},
+            {"seconds", phases},
+            {"total_seconds", total},
+            {"memory_budget_bytes", r.memoryBudgetBytes},
+            {"peak_rss_bytes", r.peakRssBytes},
+    };
+    return j.dump(2);
+}
+
+} // namespace ff::builder

@@ -1,0 +1,46 @@
+#pragma once
+
+#include <glm/glm.hpp>
+
+#include <array>
+#include <cstdint>
+#include <vector>
+
+namespace ff::runtime {
+
+/** A run of triangles inside one Geometry page, drawn with transforms[transform]. */
+struct GeometryDraw {
+    std::uint64_t page;
+    std::uint32_t firstTriangle;
+    std::uint32_t triangleCount;
+    std::uint32_t transform;
+};
+
+/** A color cube: a box in its transform's frame with six premultiplied RGBA8 faces. */
+struct CubeDraw {
+    glm::vec3 boxMin;
+    glm::vec3 boxMax;
+    std::uint32_t transform;
+    std::array<std::array<std::uint8_t, 4>, 6> faces;
+};
+
+/**
+ * What one frame draws: opaque geometry (any order) and color cubes in back-to-front order.
+ * Reused from frame to frame (cleared, not freed) so selection does not allocate.
+ */
+struct DrawList {
+    std::vector<glm::mat4> transforms; ///< [0] is the identity
+    /** The eye in each transform's local frame (cube face selection). */
+    std::vector<glm::vec3> localEyes;
+    std::vector<GeometryDraw> geometry;
+    std::vector<CubeDraw> cubes;
+
+    void clear() {
+        transforms.clear();
+        localEyes.clear();
+        geometry.clear();
+        cubes.clear();
+    }
+};
+
+} // namespace ff::runtime

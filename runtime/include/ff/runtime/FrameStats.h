@@ -1,0 +1,28 @@
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+namespace ff::runtime {
+
+/** Per-frame statistics: part of the product (JSON for machines), not debug output. */
+struct FrameStats {
+    std::uint64_t nodesVisited = 0;  ///< node records read by selection
+    std::uint64_t nodesCulled = 0;   ///< outside the frustum
+    std::uint64_t instancesEntered = 0; ///< instance nodes refined into their prototype
+    std::uint64_t cubesDrawn = 0;
+    std::uint64_t cubeFacesDrawn = 0; ///< front-facing faces of drawn cubes
+    /** Front-facing cube faces drawn per level of their own hierarchy (index = level). */
+    std::vector<std::uint64_t> cubeFacesPerLevel;
+    std::uint64_t trianglesDrawn = 0;
+    std::uint64_t geometryDraws = 0; ///< page runs drawn
+    std::uint64_t pagesUploaded = 0; ///< geometry pages sent to the GPU this frame
+    double selectMs = 0.0;
+    double drawMs = 0.0;  ///< submission + GPU until finished (glFinish)
+    double totalMs = 0.0;
+
+    std::string toJson() const;
+};
+
+} // namespace ff::runtime

@@ -1,0 +1,25 @@
+#include <ff/runtime/FrameStats.h>
+
+#include <nlohmann/json.hpp>
+
+namespace ff::runtime {
+
+std::string FrameStats::toJson() const {
+    const nlohmann::json j = {
+            {"nodes_visited", nodesVisited},
+            {"nodes_culled", nodesCulled},
+            {"instances_entered", instancesEntered},
+            {"cubes_drawn", cubesDrawn},
+            {"cube_faces_drawn", cubeFacesDrawn},
+            {"cube_faces_per_level", cubeFacesPerLevel},
+            {"triangles_drawn", trianglesDrawn},
+            {"geometry_draws", geometryDraws},
+            {"pages_uploaded", pagesUploaded},
+            {"select_ms", selectMs},
+            {"draw_ms", drawMs},
+            {"total_ms", totalMs},
+    };
+    return j.dump();
+}
+
+} // namespace ff::runtime

@@ -1,0 +1,361 @@
+#include <ff/runtime/Renderer.h>
+
+#include "GlHeaders.h"
+#include "Shaders.h"
+
+#include <ff/cache/PageLru.h>
+#include <ff/storage/ShadingModel.h>
+
+#include <glm/gtc/type_ptr.hpp>
+
+#include <chrono>
+#include <cstddef>
+#include <string>
+#include <unordered_map>
+#include <vector>
+
+namespace ff::runtime {
+
+namespace {
+
+struct IndirectCommand {
+    GLuint count;
+    GLuint instanceCount;
+    GLuint first;
+    GLuint baseInstance;
+};
+
+Result<GLuint> compileShader(GLenum type, const char* source) {
+    const GLuint shader = glCreateShader(type);
+    glShaderSource(shader, 1, &source, nullptr);
+    glCompileShader(shader);
+    GLint ok = 0;
+    glGetShaderiv(shader, GL_COMPILE_STATUS, &ok);
+    if (!ok) {
+        std::string log(4096, '\0');
+        GLsizei length = 0;
+        glGetShaderInfoLog(shader, static_cast<GLsizei>(log.size()), &length, log.data());
+        log.resize(static_cast<std::size_t>(length));
+        glDeleteShader(shader);
+        return Status(ErrorCode::Internal, "shader compilation failed: " + log);
+    }
+    return shader;
+}
+
+Result<GLuint> linkProgram(const char* vertexSource, const char* fragmentSource) {
+    FF_ASSIGN_OR_RETURN(const GLuint vs, compileShader(GL_VERTEX_SHADER, vertexSource));
+    FF_ASSIGN_OR_RETURN(const GLuint fs, compileShader(GL_FRAGMENT_SHADER, fragmentSource));
+    const GLuint program = glCreateProgram();
+    glAttachShader(program, vs);
+    glAttachShader(program, fs);
+    glLinkProgram(program);
+    glDeleteShader(vs);
+    glDeleteShader(fs);
+    GLint ok = 0;
+    glGetProgramiv(program, GL_LINK_STATUS, &ok);
+    if (!ok) {
+        std::string log(4096, '\0');
+        GLsizei length = 0;
+        glGetProgramInfoLog(program, static_cast<GLsizei>(log.size()), &length, log.data());
+        log.resize(static_cast<std::size_t>(length));
+        glDeleteProgram(program);
+        return Status(ErrorCode::Internal, "shader link failed: " + log);
+    }
+    return program;
+}
+
+// Grows a buffer to at least `bytes` (contents are rewritten every frame, so none are kept).
+void ensureCapacity(GLuint buffer, GLsizeiptr& capacity, GLsizeiptr bytes) {
+    if (bytes <= capacity)
+        return;
+    capacity = std::max<GLsizeiptr>(bytes, capacity * 2);
+    glNamedBufferData(buffer, capacity, nullptr, GL_DYNAMIC_DRAW);
+}
+
+} // namespace
+
+struct Renderer::Impl {
+    const storage::SceneFile* scene = nullptr;
+    RendererOptions options;
+    GLuint geometryProgram = 0;
+    GLuint cubeProgram = 0;
+    GLuint geometryVao = 0;
+    GLuint cubeVao = 0;
+    // The page arena: one slot per resident geometry page.
+    GLuint arena = 0;
+    GLsizeiptr slotBytes = 0;
+    GLuint verticesPerSlot = 0;
+    std::uint32_t slotCount = 0;
+    std::unordered_map<std::uint64_t, std::uint32_t> slotOfPage;
+    std::vector<std::uint64_t> pageOfSlot;
+    std::vector<std::uint32_t> slotBatch; ///< batch number that last used a slot
+    std::vector<std::uint32_t> freeSlots;
+    cache::PageLru lru;
+    std::uint32_t batch = 0;
+    // Per-frame buffers.
+    GLuint transforms = 0, normalMatrices = 0, localEyes = 0, iota = 0, indirect = 0, cubes = 0;
+    GLsizeiptr transformsCap = 0, normalsCap = 0, eyesCap = 0, iotaCap = 0, indirectCap = 0, cubesCap = 0;
+    std::vector<IndirectCommand> commands;
+    std::vector<glm::mat4> normalScratch;
+    std::vector<glm::vec4> eyeScratch;
+    // Render target.
+    GLuint framebuffer = 0, colorTexture = 0, depthBuffer = 0;
+    int targetWidth = 0, targetHeight = 0;
+    std::vector<std::uint8_t> readback;
+
+    ~Impl();
+    Status ensureTarget(int width, int height);
+    Result<std::uint32_t> residentSlot(std::uint64_t page, FrameStats& stats);
+    void drawBatch(const glm::mat4& viewProjection);
+    Status drawGeometry(const DrawList& list, const glm::mat4& viewProjection, FrameStats& stats);
+    void drawCubes(const DrawList& list, const glm::mat4& viewProjection);
+};
+
+Renderer::Impl::~Impl() {
+    const GLuint buffers[] = {arena, transforms, normalMatrices, localEyes, iota, indirect, cubes};
+    glDeleteBuffers(7, buffers);
+    const GLuint vaos[] = {geometryVao, cubeVao};
+    glDeleteVertexArrays(2, vaos);
+    glDeleteProgram(geometryProgram);
+    glDeleteProgram(cubeProgram);
+    glDeleteFramebuffers(1, &framebuffer);
+    glDeleteTextures(1, &colorTexture);
+    glDeleteRenderbuffers(1, &depthBuffer);
+}
+
+Renderer::Renderer(std::unique_ptr<Impl> impl) : mImpl(std::move(impl)) {}
+Renderer::~Renderer() = default;
+
+Result<std::unique_ptr<Renderer>> Renderer::create(const storage::SceneFile& scene, const RendererOptions& options) {
+    auto impl = std::make_unique<Impl>();
+    impl->scene = &scene;
+    impl->options = options;
+    FF_ASSIGN_OR_RETURN(impl->geometryProgram, linkProgram(gl::kGeometryVertexShader, gl::kGeometryFragmentShader));
+    FF_ASSIGN_OR_RETURN(impl->cubeProgram, linkProgram(gl::kCubeVertexShader, gl::kCubeFragmentShader));
+
+    // Slots hold a page's triangles without its trailer, so vertex offsets stay whole vertices.
+    const std::uint32_t trianglesPerPage = storage::trianglesPerPage(scene.pageSize());
+    impl->slotBytes = static_cast<GLsizeiptr>(trianglesPerPage * sizeof(storage::PackedTriangle));
+    impl->verticesPerSlot = trianglesPerPage * 3;
+    impl->slotCount = static_cast<std::uint32_t>(
+            std::clamp<std::uint64_t>(options.gpuBudgetBytes / static_cast<std::uint64_t>(impl->slotBytes), 1, 1u << 20));
+    impl->pageOfSlot.assign(impl->slotCount, 0);
+    impl->slotBatch.assign(impl->slotCount, 0);
+    for (std::uint32_t s = impl->slotCount; s-- > 0;)
+        impl->freeSlots.push_back(s);
+
+    GLuint buffers[7];
+    glCreateBuffers(7, buffers);
+    impl->arena = buffers[0];
+    impl->transforms = buffers[1];
+    impl->normalMatrices = buffers[2];
+    impl->localEyes = buffers[3];
+    impl->iota = buffers[4];
+    impl->indirect = buffers[5];
+    impl->cubes = buffers[6];
+    glNamedBufferData(impl->arena, impl->slotBytes * impl->slotCount, nullptr, GL_DYNAMIC_DRAW);
+
+    // Geometry: PackedVertex layout (20 bytes) straight from the pages.
+    glCreateVertexArrays(1, &impl->geometryVao);
+    const GLuint g = impl->geometryVao;
+    glVertexArrayVertexBuffer(g, 0, impl->arena, 0, sizeof(storage::PackedVertex));
+    glVertexArrayAttribFormat(g, 0, 3, GL_FLOAT, GL_FALSE, offsetof(storage::PackedVertex, position));
+    glVertexArrayAttribFormat(g, 1, 2, GL_SHORT, GL_TRUE, offsetof(storage::PackedVertex, normalOct));
+    glVertexArrayAttribFormat(g, 2, 4, GL_UNSIGNED_BYTE, GL_TRUE, offsetof(storage::PackedVertex, color));
+    for (GLuint a = 0; a < 3; ++a) {
+        glVertexArrayAttribBinding(g, a, 0);
+        glEnableVertexArrayAttrib(g, a);
+    }
+    // The transform index: an instanced attribute over 0, 1, 2, ... offset by baseInstance.
+    glVertexArrayAttribIFormat(g, 3, 1, GL_UNSIGNED_INT, 0);
+    glVertexArrayAttribBinding(g, 3, 1);
+    glVertexArrayBindingDivisor(g, 1, 1);
+    glEnableVertexArrayAttrib(g, 3);
+
+    // Cubes: one CubeDraw per instance.
+    glCreateVertexArrays(1, &impl->cubeVao);
+    const GLuint c = impl->cubeVao;
+    glVertexArrayVertexBuffer(c, 0, impl->cubes, 0, sizeof(CubeDraw));
+    glVertexArrayBindingDivisor(c, 0, 1);
+    glVertexArrayAttribFormat(c, 0, 3, GL_FLOAT, GL_FALSE, offsetof(CubeDraw, boxMin));
+    glVertexArrayAttribFormat(c, 1, 3, GL_FLOAT, GL_FALSE, offsetof(CubeDraw, boxMax));
+    glVertexArrayAttribIFormat(c, 2, 1, GL_UNSIGNED_INT, offsetof(CubeDraw, transform));
+    for (GLuint f = 0; f < 6; ++f)
+        glVertexArrayAttribFormat(c, 3 + f, 4, GL_UNSIGNED_BYTE, GL_TRUE,
+                                  static_cast<GLuint>(offsetof(CubeDraw, faces) + 4 * f));
+    for (GLuint a = 0; a < 9; ++a) {
+        glVertexArrayAttribBinding(c, a, 0);
+        glEnableVertexArrayAttrib(c, a);
+    }
+    if (const GLenum error = glGetError(); error != GL_NO_ERROR)
+        return Status(ErrorCode::Internal, "OpenGL error " + std::to_string(error) + " while creating the renderer");
+    return std::unique_ptr<Renderer>(new Renderer(std::move(impl)));
+}
+
+Status Renderer::Impl::ensureTarget(int width, int height) {
+    if (width == targetWidth && height == targetHeight && framebuffer)
+        return Status::ok();
+    GLint maxSize = 0;
+    glGetIntegerv(GL_MAX_RENDERBUFFER_SIZE, &maxSize);
+    if (width > maxSize || height > maxSize)
+        return Status(ErrorCode::InvalidArgument, "render target " + std::to_string(width) + "x" + std::to_string(height) +
+                                                          " exceeds the GL limit of " + std::to_string(maxSize));
+    glDeleteFramebuffers(1, &framebuffer);
+    glDeleteTextures(1, &colorTexture);
+    glDeleteRenderbuffers(1, &depthBuffer);
+    glCreateTextures(GL_TEXTURE_2D, 1, &colorTexture);
+    glTextureStorage2D(colorTexture, 1, GL_SRGB8_ALPHA8, width, height);
+    glCreateRenderbuffers(1, &depthBuffer);
+    glNamedRenderbufferStorage(depthBuffer, GL_DEPTH_COMPONENT24, width, height);
+    glCreateFramebuffers(1, &framebuffer);
+    glNamedFramebufferTexture(framebuffer, GL_COLOR_ATTACHMENT0, colorTexture, 0);
+    glNamedFramebufferRenderbuffer(framebuffer, GL_DEPTH_ATTACHMENT, GL_RENDERBUFFER, depthBuffer);
+    if (glCheckNamedFramebufferStatus(framebuffer, GL_FRAMEBUFFER) != GL_FRAMEBUFFER_COMPLETE)
+        return Status(ErrorCode::Internal, "render target framebuffer is incomplete");
+    targetWidth = width;
+    targetHeight = height;
+    return Status::ok();
+}
+
+Result<std::uint32_t> Renderer::Impl::residentSlot(std::uint64_t page, FrameStats& stats) {
+    if (const auto it = slotOfPage.find(page); it != slotOfPage.end())
+        return it->second;
+    if (freeSlots.empty()) {
+        // Evict the least recently used page not needed by the batch being assembled.
+        const auto victim = lru.oldestWhereNot([this](std::uint64_t p) { return slotBatch[slotOfPage.at(p)] == batch; });
+        if (!victim)
+            return Status(ErrorCode::OutOfBudget, "batch full"); // caller flushes and retries
+        const std::uint32_t slot = slotOfPage.at(*victim);
+        slotOfPage.erase(*victim);
+        lru.erase(*victim);
+        freeSlots.push_back(slot);
+    }
+    FF_ASSIGN_OR_RETURN(const std::span<const std::byte> payload, scene->pagePayload(page, storage::PageType::Geometry));
+    const std::uint32_t slot = freeSlots.back();
+    freeSlots.pop_back();
+    glNamedBufferSubData(arena, static_cast<GLintptr>(slot) * slotBytes, slotBytes, payload.data());
+    slotOfPage[page] = slot;
+    pageOfSlot[slot] = page;
+    ++stats.pagesUploaded;
+    return slot;
+}
+
+void Renderer::Impl::drawBatch(const glm::mat4& viewProjection) {
+    if (commands.empty())
+        return;
+    const auto bytes = static_cast<GLsizeiptr>(commands.size() * sizeof(IndirectCommand));
+    ensureCapacity(indirect, indirectCap, bytes);
+    glNamedBufferSubData(indirect, 0, bytes, commands.data());
+    glUseProgram(geometryProgram);
+    glUniformMatrix4fv(glGetUniformLocation(geometryProgram, "uViewProjection"), 1, GL_FALSE, glm::value_ptr(viewProjection));
+    glUniform3f(glGetUniformLocation(geometryProgram, "uLightDirection"), storage::kLightDirection[0],
+                storage::kLightDirection[1], storage::kLightDirection[2]);
+    glUniform1f(glGetUniformLocation(geometryProgram, "uAmbient"), storage::kAmbient);
+    glUniform1f(glGetUniformLocation(geometryProgram, "uDiffuse"), storage::kDiffuse);
+    glBindVertexArray(geometryVao);
+    glBindBuffer(GL_DRAW_INDIRECT_BUFFER, indirect);
+    glMultiDrawArraysIndirect(GL_TRIANGLES, nullptr, static_cast<GLsizei>(commands.size()), 0);
+    commands.clear();
+    ++batch;
+}
+
+Status Renderer::Impl::drawGeometry(const DrawList& list, const glm::mat4& viewProjection, FrameStats& stats) {
+    ++batch;
+    for (const GeometryDraw& draw : list.geometry) {
+        Result<std::uint32_t> slot = residentSlot(draw.page, stats);
+        if (!slot && slot.status().code() == ErrorCode::OutOfBudget) {
+            drawBatch(viewProjection); // frees this batch's pins
+            slot = residentSlot(draw.page, stats);
+        }
+        if (!slot)
+            return slot.status();
+        slotBatch[*slot] = batch;
+        lru.touch(draw.page);
+        commands.push_back({draw.triangleCount * 3, 1, *slot * verticesPerSlot + draw.firstTriangle * 3, draw.transform});
+    }
+    drawBatch(viewProjection);
+    return Status::ok();
+}
+
+void Renderer::Impl::drawCubes(const DrawList& list, const glm::mat4& viewProjection) {
+    if (list.cubes.empty())
+        return;
+    const auto bytes = static_cast<GLsizeiptr>(list.cubes.size() * sizeof(CubeDraw));
+    ensureCapacity(cubes, cubesCap, bytes);
+    glNamedBufferSubData(cubes, 0, bytes, list.cubes.data());
+    glUseProgram(cubeProgram);
+    glUniformMatrix4fv(glGetUniformLocation(cubeProgram, "uViewProjection"), 1, GL_FALSE, glm::value_ptr(viewProjection));
+    glBindVertexArray(cubeVao);
+    glEnable(GL_BLEND);
+    glBlendFunc(GL_ONE, GL_ONE_MINUS_SRC_ALPHA); // premultiplied "over", back to front
+    glDepthMask(GL_FALSE);
+    glDrawArraysInstanced(GL_TRIANGLES, 0, 36, static_cast<GLsizei>(list.cubes.size()));
+    glDepthMask(GL_TRUE);
+    glDisable(GL_BLEND);
+}
+
+Result<Image> Renderer::render(
+        const DrawList& list, const Camera& camera, int width, int height, int supersample, FrameStats& stats) {
+    Impl& s = *mImpl;
+    if (width <= 0 || height <= 0 || supersample <= 0)
+        return Status(ErrorCode::InvalidArgument, "image size and supersampling must be positive");
+    const auto start = std::chrono::steady_clock::now();
+    const int targetWidth = width * supersample;
+    const int targetHeight = height * supersample;
+    FF_RETURN_IF_ERROR(s.ensureTarget(targetWidth, targetHeight));
+
+    // Transforms, their normal matrices and the eye in each frame.
+    const auto transformCount = static_cast<GLsizeiptr>(list.transforms.size());
+    s.normalScratch.resize(list.transforms.size());
+    s.eyeScratch.resize(list.transforms.size());
+    for (std::size_t i = 0; i < list.transforms.size(); ++i) {
+        s.normalScratch[i] = glm::mat4(glm::transpose(glm::inverse(glm::mat3(list.transforms[i]))));
+        s.eyeScratch[i] = glm::vec4(list.localEyes[i], 1.0f);
+    }
+    ensureCapacity(s.transforms, s.transformsCap, transformCount * static_cast<GLsizeiptr>(sizeof(glm::mat4)));
+    ensureCapacity(s.normalMatrices, s.normalsCap, transformCount * static_cast<GLsizeiptr>(sizeof(glm::mat4)));
+    ensureCapacity(s.localEyes, s.eyesCap, transformCount * static_cast<GLsizeiptr>(sizeof(glm::vec4)));
+    glNamedBufferSubData(s.transforms, 0, transformCount * static_cast<GLsizeiptr>(sizeof(glm::mat4)), list.transforms.data());
+    glNamedBufferSubData(s.normalMatrices, 0, transformCount * static_cast<GLsizeiptr>(sizeof(glm::mat4)), s.normalScratch.data());
+    glNamedBufferSubData(s.localEyes, 0, transformCount * static_cast<GLsizeiptr>(sizeof(glm::vec4)), s.eyeScratch.data());
+    if (s.iotaCap < transformCount * static_cast<GLsizeiptr>(sizeof(GLuint))) {
+        std::vector<GLuint> values(static_cast<std::size_t>(std::max<GLsizeiptr>(transformCount * 2, 1024)));
+        for (std::size_t i = 0; i < values.size(); ++i)
+            values[i] = static_cast<GLuint>(i);
+        s.iotaCap = static_cast<GLsizeiptr>(values.size() * sizeof(GLuint));
+        glNamedBufferData(s.iota, s.iotaCap, values.data(), GL_STATIC_DRAW);
+        glVertexArrayVertexBuffer(s.geometryVao, 1, s.iota, 0, sizeof(GLuint));
+    }
+    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 0, s.transforms);
+    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 1, s.normalMatrices);
+    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 2, s.localEyes);
+
+    glBindFramebuffer(GL_FRAMEBUFFER, s.framebuffer);
+    glViewport(0, 0, targetWidth, targetHeight);
+    glEnable(GL_FRAMEBUFFER_SRGB);
+    glDisable(GL_CULL_FACE);
+    glEnable(GL_DEPTH_TEST);
+    glDepthFunc(GL_LESS);
+    glDepthMask(GL_TRUE);
+    glDisable(GL_BLEND);
+    glClearColor(0.0f, 0.0f, 0.0f, 0.0f);
+    glClearDepth(1.0);
+    glClear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
+
+    const glm::mat4 viewProjection =
+            camera.projection(static_cast<float>(width) / static_cast<float>(height)) * camera.view();
+    FF_RETURN_IF_ERROR(s.drawGeometry(list, viewProjection, stats));
+    s.drawCubes(list, viewProjection);
+    glFinish(); // the frame time is the time until the GPU is done, not until submission
+    stats.drawMs += std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+
+    s.readback.resize(static_cast<std::size_t>(targetWidth) * static_cast<std::size_t>(targetHeight) * 4);
+    glPixelStorei(GL_PACK_ALIGNMENT, 1);
+    glReadPixels(0, 0, targetWidth, targetHeight, GL_RGBA, GL_UNSIGNED_BYTE, s.readback.data());
+    glBindFramebuffer(GL_FRAMEBUFFER, 0);
+    if (const GLenum error = glGetError(); error != GL_NO_ERROR)
+        return Status(ErrorCode::Internal, "OpenGL error " + std::to_string(error) + " while rendering");
+    return resolveFramebuffer(s.readback, width, height, supersample, s.options.backgroundLinear);
+}
+
+} // namespace ff::runtime

@@ -1,0 +1,12 @@
+#pragma once
+
+namespace ff::runtime::gl {
+
+/** Geometry: PackedVertex attributes, per-draw transform index via baseInstance. */
+extern const char* const kGeometryVertexShader;
+extern const char* const kGeometryFragmentShader;
+/** Color cubes: one instance per cube, 36 vertices, hidden faces collapsed. */
+extern const char* const kCubeVertexShader;
+extern const char* const kCubeFragmentShader;
+
+} // namespace ff::runtime::gl
