@@ -90,7 +90,7 @@ Result<GeneratorReport> runGenerator(const GeneratorSpec& spec, ISceneSink& sink
     for (const generators::GeneratorEntry& entry : registry()) {
         if (entry.info.name == spec.name)
             return entry.run(spec, sink);
-        known += (known.empty() ? "" : ", ") + entry.info.name;
+        known.append(known.empty() ? "" : ", ").append(entry.info.name);
     }
     return Status(
             ErrorCode::InvalidArgument,

@@ -3,8 +3,10 @@
 #include <ff/storage/VertexCodec.h>
 
 #include <algorithm>
+#include <array>
 #include <charconv>
 #include <cmath>
+#include <initializer_list>
 #include <string>
 #include <system_error>
 
@@ -30,6 +32,22 @@ constexpr double kInvFact10 = 1.0 / 3628800.0;
 constexpr double kInvFact12 = 1.0 / 479001600.0;
 constexpr double kInvFact14 = 1.0 / 87178291200.0;
 constexpr double kInvFact16 = 1.0 / 20922789888000.0;
+
+/** Joins message parts. Used instead of operator+ chains, on which GCC 12 -O3 emits a false
+ *  -Wrestrict (GCC bug 105329) that -Werror turns into a build failure. */
+std::string concat(std::initializer_list<std::string_view> parts) {
+    std::string out;
+    for (const std::string_view part : parts)
+        out.append(part);
+    return out;
+}
+
+/** The shortest text that reads back as `value` ("0.0001", not "0.000100"). */
+std::string shortest(double value) {
+    std::array<char, 32> buffer{};
+    const auto result = std::to_chars(buffer.data(), buffer.data() + buffer.size(), value);
+    return std::string(buffer.data(), result.ptr);
+}
 
 } // namespace
 
@@ -73,23 +91,23 @@ GeneratorInfo makeGeneratorInfo(
     info.summary = std::string(summary);
     for (const ParamDef& def : params)
         info.params.emplace_back(
-                std::string(def.key),
-                std::string(def.defaultValue) + ": " + std::string(def.meaning));
+                std::string(def.key), concat({def.defaultValue, ": ", def.meaning}));
     return info;
 }
 
 Status ParamReader::checkKnownKeys() const {
-    for (const auto& [key, value] : mSpec.params) {
+    for (const auto& param : mSpec.params) {
+        // Not a structured binding: clang < 16 cannot capture those in a lambda.
+        const std::string& key = param.first;
         const bool known = std::any_of(
                 mDefs.begin(), mDefs.end(), [&](const ParamDef& def) { return def.key == key; });
         if (!known) {
             std::string keys;
             for (const ParamDef& def : mDefs)
-                keys += (keys.empty() ? "" : ", ") + std::string(def.key);
+                keys.append(keys.empty() ? "" : ", ").append(def.key);
             return Status(
                     ErrorCode::InvalidArgument,
-                    std::string(mGenerator) + ": unknown parameter '" + key + "' (known: " + keys +
-                            ")");
+                    concat({mGenerator, ": unknown parameter '", key, "' (known: ", keys, ")"}));
         }
     }
     return Status::ok();
@@ -111,14 +129,18 @@ ParamReader::integer(std::string_view key, std::uint64_t min, std::uint64_t max)
     std::uint64_t parsed = 0;
     const auto [end, error] = std::from_chars(value.data(), value.data() + value.size(), parsed);
     if (error == std::errc::result_out_of_range)
-        return invalid(key, "'" + std::string(value) + "' is too large");
+        return invalid(key, concat({"'", value, "' is too large"}));
     if (value.empty() || error != std::errc() || end != value.data() + value.size())
-        return invalid(key, "expected a non-negative integer, got '" + std::string(value) + "'");
+        return invalid(key, concat({"expected a non-negative integer, got '", value, "'"}));
     if (parsed < min || parsed > max)
         return invalid(
                 key,
-                "must be in [" + std::to_string(min) + ", " + std::to_string(max) + "], got " +
-                        std::string(value));
+                concat({"must be in [",
+                        std::to_string(min),
+                        ", ",
+                        std::to_string(max),
+                        "], got ",
+                        value}));
     return parsed;
 }
 
@@ -128,20 +150,17 @@ Result<double> ParamReader::real(std::string_view key, double min, double max) c
     const auto [end, error] = std::from_chars(value.data(), value.data() + value.size(), parsed);
     if (value.empty() || error != std::errc() || end != value.data() + value.size() ||
         !std::isfinite(parsed))
-        return invalid(key, "expected a finite number, got '" + std::string(value) + "'");
+        return invalid(key, concat({"expected a finite number, got '", value, "'"}));
     if (parsed < min || parsed > max)
         return invalid(
                 key,
-                "must be in [" + std::to_string(min) + ", " + std::to_string(max) + "], got " +
-                        std::string(value));
+                concat({"must be in [", shortest(min), ", ", shortest(max), "], got ", value}));
     return parsed;
 }
 
 Status ParamReader::invalid(std::string_view key, std::string_view why) const {
     return Status(
-            ErrorCode::InvalidArgument,
-            std::string(mGenerator) + ": parameter '" + std::string(key) +
-                    "': " + std::string(why));
+            ErrorCode::InvalidArgument, concat({mGenerator, ": parameter '", key, "': ", why}));
 }
 
 TriangleBatcher::TriangleBatcher(ISceneSink& sink, PrototypeId prototype)
