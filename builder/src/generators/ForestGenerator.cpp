@@ -53,13 +53,14 @@ constexpr std::uint64_t treeTriangles() {
     return total;
 }
 constexpr std::uint64_t kTreeTriangles = treeTriangles();
-static_assert(kTreeTriangles >= 45'000 && kTreeTriangles <= 55'000, "paper's tree: 52,470");
+// 52,588: 10,588 in 603 tubes + 42,000 in 10,500 leaves (the paper's tree: 52,470).
+static_assert(kTreeTriangles >= 45'000 && kTreeTriangles <= 55'000);
 static_assert(kLevels.back().children == 0);
 
 // Shape, in units; the tree stands ~10 tall on the origin, Y up.
-constexpr float kTrunkLength = 5.6f;
-constexpr float kTrunkRadius = 0.36f;
-constexpr float kLeafLength = 0.36f;
+constexpr float kTrunkLength = 7.0f;
+constexpr float kTrunkRadius = 0.45f;
+constexpr float kLeafLength = 0.45f;
 constexpr glm::vec3 kUp(0.0f, 1.0f, 0.0f);
 
 constexpr glm::vec4 kBark(0.10f, 0.06f, 0.03f, 1.0f); // linear RGB
@@ -231,7 +232,7 @@ private:
         child.direction = direction;
         child.hint = at.direction;
         const float jitter = mRng.uniform(0.85f, 1.15f);
-        static constexpr std::array<float, 5> kLengthRatio = {0.0f, 0.62f, 0.46f, 0.5f, 0.55f};
+        static constexpr std::array<float, 5> kLengthRatio = {0.0f, 0.72f, 0.48f, 0.5f, 0.55f};
         const float taper = fromTrunk ? 1.05f - 0.6f * s : 1.0f - 0.35f * s;
         child.length = parent.length * kLengthRatio[child.level] * taper * jitter;
         child.baseRadius = at.radius * 0.62f;

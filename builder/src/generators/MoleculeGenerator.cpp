@@ -59,6 +59,18 @@ glm::vec3 randomUnitVector(SplitMix64& rng) noexcept {
     return {r * static_cast<float>(azimuth.cos), r * static_cast<float>(azimuth.sin), z};
 }
 
+/** Cube root by bisection: only * and comparisons, so, unlike std::cbrt (libm), the same on
+ *  every machine. x >= 0. */
+double cubeRoot(double x) noexcept {
+    double lo = 0.0;
+    double hi = std::max(1.0, x);
+    for (int i = 0; i < 64; ++i) {
+        const double mid = 0.5 * (lo + hi);
+        (mid * mid * mid < x ? lo : hi) = mid;
+    }
+    return hi;
+}
+
 /** Slices x stacks of a UV sphere giving 2 * slices * (stacks - 1) triangles near `target`. */
 struct SphereTessellation {
     std::uint32_t slices;
@@ -117,7 +129,7 @@ template <typename Visit> Status walkChain(std::uint64_t seed, std::uint64_t ato
     // Radius of a globule packing the atoms at ~50% density: where the pull starts to matter.
     const float meanRadius = 1.5f;
     const auto globule = static_cast<float>(
-            meanRadius * kBondFactor * 2.0 * std::cbrt(static_cast<double>(atoms) / 0.5));
+            meanRadius * kBondFactor * 2.0 * cubeRoot(static_cast<double>(atoms) / 0.5));
     glm::vec3 position(0.0f);
     glm::vec3 direction = randomUnitVector(stepRng);
     std::size_t element = pickElement(elementRng);
