@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <cmath>
 #include <map>
+#include <ostream>
 #include <set>
 #include <string>
 #include <vector>
@@ -168,6 +169,10 @@ struct GoldenScene {
     std::uint64_t triangleHash; ///< FNV-1a 64 of every triangle byte, in order
     std::uint64_t instanceHash; ///< FNV-1a 64 of every (prototype, transform)
 };
+
+void PrintTo(const GoldenScene& scene, std::ostream* out) {
+    *out << scene.spec;
+}
 
 class GeneratorDeterminismTest : public ::testing::TestWithParam<GoldenScene> {};
 
