@@ -1,0 +1,135 @@
+// blinds: closely spaced parallel thin slabs, the "venetian blind" that Chamberlain et al. '96
+// (§3.2) name as the worst case for a six-sample colour cube: a
+// small change of view direction flips the cluster between opaque and see-through. One
+// prototype, one identity instance, so the builder sees the slabs as ordinary geometry.
+
+#include "GeneratorKit.h"
+
+#include <array>
+
+namespace ff::builder::generators {
+
+namespace {
+
+constexpr std::array<ParamDef, 6> kParams = {{
+        {"slabs", "100", "number of slabs, stacked along +Y (1..10000000)"},
+        {"spacing", "0.1", "distance between neighbouring slab centres, units"},
+        {"thickness", "0.02", "slab thickness along Y, units (less than spacing)"},
+        {"width", "10", "slab extent along X, units"},
+        {"depth", "1", "slab extent along Z, units"},
+        {"tilt", "0", "slat angle about the X axis, degrees (-89..89)"},
+}};
+
+constexpr std::uint64_t kTrianglesPerSlab = 12;
+
+// Light colours (linear RGB) that differ enough to alias visibly at a grazing angle.
+constexpr std::array<glm::vec4, 2> kSlabColors = {
+        glm::vec4(0.85f, 0.80f, 0.66f, 1.0f), // cream
+        glm::vec4(0.55f, 0.68f, 0.86f, 1.0f), // pale blue
+};
+
+struct BlindsParams {
+    std::uint64_t slabs = 0;
+    float spacing = 0.0f;
+    float thickness = 0.0f;
+    float width = 0.0f;
+    float depth = 0.0f;
+    double tiltDegrees = 0.0;
+};
+
+Result<BlindsParams> readParams(const GeneratorSpec& spec) {
+    const ParamReader reader("blinds", spec, kParams);
+    FF_RETURN_IF_ERROR(reader.checkKnownKeys());
+    BlindsParams p;
+    FF_ASSIGN_OR_RETURN(p.slabs, reader.integer("slabs", 1, 10'000'000));
+    FF_ASSIGN_OR_RETURN(const double spacing, reader.real("spacing", 1e-4, 1e4));
+    FF_ASSIGN_OR_RETURN(const double thickness, reader.real("thickness", 1e-5, 1e4));
+    FF_ASSIGN_OR_RETURN(const double width, reader.real("width", 1e-3, 1e6));
+    FF_ASSIGN_OR_RETURN(const double depth, reader.real("depth", 1e-3, 1e6));
+    FF_ASSIGN_OR_RETURN(p.tiltDegrees, reader.real("tilt", -89.0, 89.0));
+    if (!(thickness < spacing))
+        return reader.invalid("thickness", "must be less than spacing, or the slabs intersect");
+    p.spacing = static_cast<float>(spacing);
+    p.thickness = static_cast<float>(thickness);
+    p.width = static_cast<float>(width);
+    p.depth = static_cast<float>(depth);
+    return p;
+}
+
+/** An oriented box: centre, orthonormal right-handed axes, half extents. */
+struct Box {
+    glm::vec3 center;
+    std::array<glm::vec3, 3> axis;
+    std::array<float, 3> half;
+};
+
+/** Six outward-facing quads, two triangles each, flat normals. */
+Status emitBox(const Box& box, const glm::vec4& color, TriangleBatcher& out) {
+    for (int a = 0; a < 3; ++a) {
+        const auto ia = static_cast<std::size_t>(a);
+        const auto iu = static_cast<std::size_t>((a + 1) % 3);
+        const auto iv = static_cast<std::size_t>((a + 2) % 3);
+        for (const float side : {1.0f, -1.0f}) {
+            const glm::vec3 normal = side * box.axis[ia];
+            // u x v must equal the outward normal for counter-clockwise corners.
+            const glm::vec3 u = (side > 0.0f ? box.axis[iu] : box.axis[iv]) *
+                                (side > 0.0f ? box.half[iu] : box.half[iv]);
+            const glm::vec3 v = (side > 0.0f ? box.axis[iv] : box.axis[iu]) *
+                                (side > 0.0f ? box.half[iv] : box.half[iu]);
+            const glm::vec3 faceCenter = box.center + normal * box.half[ia];
+            const std::array<SourceVertex, 4> quad = {{
+                    {faceCenter - u - v, normal, color},
+                    {faceCenter + u - v, normal, color},
+                    {faceCenter + u + v, normal, color},
+                    {faceCenter - u + v, normal, color},
+            }};
+            FF_RETURN_IF_ERROR(out.add(quad[0], quad[1], quad[2]));
+            FF_RETURN_IF_ERROR(out.add(quad[0], quad[2], quad[3]));
+        }
+    }
+    return Status::ok();
+}
+
+Result<GeneratorReport> runBlinds(const GeneratorSpec& spec, ISceneSink& sink) {
+    FF_ASSIGN_OR_RETURN(const BlindsParams p, readParams(spec));
+    FF_ASSIGN_OR_RETURN(const PrototypeId prototype, sink.addPrototype("blinds"));
+
+    const SinCos tilt = sinCosTurns(p.tiltDegrees / 360.0);
+    const auto c = static_cast<float>(tilt.cos);
+    const auto s = static_cast<float>(tilt.sin);
+    Box box{};
+    box.axis = {glm::vec3(1, 0, 0), glm::vec3(0, c, s), glm::vec3(0, -s, c)};
+    box.half = {0.5f * p.width, 0.5f * p.thickness, 0.5f * p.depth};
+
+    TriangleBatcher out(sink, prototype);
+    // Centred on the origin: slab k sits at y = (k - (n-1)/2) * spacing.
+    const double middle = 0.5 * static_cast<double>(p.slabs - 1);
+    for (std::uint64_t k = 0; k < p.slabs; ++k) {
+        const double offset = (static_cast<double>(k) - middle) * static_cast<double>(p.spacing);
+        box.center = glm::vec3(0.0f, static_cast<float>(offset), 0.0f);
+        FF_RETURN_IF_ERROR(emitBox(box, kSlabColors[k % kSlabColors.size()], out));
+    }
+    FF_RETURN_IF_ERROR(out.flush());
+    FF_RETURN_IF_ERROR(sink.addInstance(prototype, glm::mat4(1.0f)));
+
+    GeneratorReport report;
+    report.storedTriangles = out.added();
+    report.triangles = report.storedTriangles;
+    report.prototypes = 1;
+    report.instances = 1;
+    FF_ASSERT(report.storedTriangles == p.slabs * kTrianglesPerSlab);
+    return report;
+}
+
+} // namespace
+
+GeneratorEntry blindsGenerator() {
+    return {makeGeneratorInfo(
+                    "blinds",
+                    "closely spaced thin parallel slabs in one prototype: the colour cube's "
+                    "worst case (venetian blind)",
+                    kParams),
+            &runBlinds};
+}
+
+} // namespace ff::builder::generators

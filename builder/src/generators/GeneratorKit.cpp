@@ -1,0 +1,207 @@
+#include "GeneratorKit.h"
+
+#include <ff/storage/VertexCodec.h>
+
+#include <algorithm>
+#include <array>
+#include <charconv>
+#include <cmath>
+#include <initializer_list>
+#include <string>
+#include <system_error>
+
+namespace ff::builder::generators {
+
+namespace {
+
+constexpr double kTwoPi = 6.283185307179586476925286766559;
+
+// Taylor coefficients 1/n!, evaluated by the compiler (correctly rounded constants).
+constexpr double kInvFact3 = 1.0 / 6.0;
+constexpr double kInvFact5 = 1.0 / 120.0;
+constexpr double kInvFact7 = 1.0 / 5040.0;
+constexpr double kInvFact9 = 1.0 / 362880.0;
+constexpr double kInvFact11 = 1.0 / 39916800.0;
+constexpr double kInvFact13 = 1.0 / 6227020800.0;
+constexpr double kInvFact15 = 1.0 / 1307674368000.0;
+constexpr double kInvFact2 = 1.0 / 2.0;
+constexpr double kInvFact4 = 1.0 / 24.0;
+constexpr double kInvFact6 = 1.0 / 720.0;
+constexpr double kInvFact8 = 1.0 / 40320.0;
+constexpr double kInvFact10 = 1.0 / 3628800.0;
+constexpr double kInvFact12 = 1.0 / 479001600.0;
+constexpr double kInvFact14 = 1.0 / 87178291200.0;
+constexpr double kInvFact16 = 1.0 / 20922789888000.0;
+
+/** Joins message parts. Used instead of operator+ chains, on which GCC 12 -O3 emits a false
+ *  -Wrestrict (GCC bug 105329) that -Werror turns into a build failure. */
+std::string concat(std::initializer_list<std::string_view> parts) {
+    std::string out;
+    for (const std::string_view part : parts)
+        out.append(part);
+    return out;
+}
+
+/** The shortest text that reads back as `value` ("0.0001", not "0.000100"). */
+std::string shortest(double value) {
+    std::array<char, 32> buffer{};
+    const auto result = std::to_chars(buffer.data(), buffer.data() + buffer.size(), value);
+    return std::string(buffer.data(), result.ptr);
+}
+
+} // namespace
+
+SinCos sinCosTurns(double turns) noexcept {
+    const double quarter = std::floor(turns * 4.0 + 0.5);
+    const double x = (turns - quarter * 0.25) * kTwoPi; // in [-pi/4, pi/4]
+    const double x2 = x * x;
+    const double s =
+            x *
+            (1.0 -
+             x2 * (kInvFact3 -
+                   x2 * (kInvFact5 -
+                         x2 * (kInvFact7 -
+                               x2 * (kInvFact9 -
+                                     x2 * (kInvFact11 - x2 * (kInvFact13 - x2 * kInvFact15)))))));
+    const double c =
+            1.0 - x2 * (kInvFact2 -
+                        x2 * (kInvFact4 -
+                              x2 * (kInvFact6 -
+                                    x2 * (kInvFact8 -
+                                          x2 * (kInvFact10 -
+                                                x2 * (kInvFact12 -
+                                                      x2 * (kInvFact14 - x2 * kInvFact16)))))));
+    // Two's complement (guaranteed since C++20) makes `& 3` a true modulo for negative quarters.
+    switch (static_cast<std::int64_t>(quarter) & 3) {
+    case 0:
+        return {s, c};
+    case 1:
+        return {c, -s};
+    case 2:
+        return {-s, -c};
+    default:
+        return {-c, s};
+    }
+}
+
+GeneratorInfo makeGeneratorInfo(
+        std::string_view name, std::string_view summary, std::span<const ParamDef> params) {
+    GeneratorInfo info;
+    info.name = std::string(name);
+    info.summary = std::string(summary);
+    for (const ParamDef& def : params)
+        info.params.emplace_back(
+                std::string(def.key), concat({def.defaultValue, ": ", def.meaning}));
+    return info;
+}
+
+Status ParamReader::checkKnownKeys() const {
+    for (const auto& param : mSpec.params) {
+        // Not a structured binding: clang < 16 cannot capture those in a lambda.
+        const std::string& key = param.first;
+        const bool known = std::any_of(
+                mDefs.begin(), mDefs.end(), [&](const ParamDef& def) { return def.key == key; });
+        if (!known) {
+            std::string keys;
+            for (const ParamDef& def : mDefs)
+                keys.append(keys.empty() ? "" : ", ").append(def.key);
+            return Status(
+                    ErrorCode::InvalidArgument,
+                    concat({mGenerator, ": unknown parameter '", key, "' (known: ", keys, ")"}));
+        }
+    }
+    return Status::ok();
+}
+
+std::string_view ParamReader::text(std::string_view key) const {
+    if (const auto it = mSpec.params.find(key); it != mSpec.params.end())
+        return it->second;
+    for (const ParamDef& def : mDefs)
+        if (def.key == key)
+            return def.defaultValue;
+    FF_ASSERT(false && "generator reads a parameter missing from its own ParamDef table");
+    return {};
+}
+
+Result<std::uint64_t>
+ParamReader::integer(std::string_view key, std::uint64_t min, std::uint64_t max) const {
+    const std::string_view value = text(key);
+    std::uint64_t parsed = 0;
+    const auto [end, error] = std::from_chars(value.data(), value.data() + value.size(), parsed);
+    if (error == std::errc::result_out_of_range)
+        return invalid(key, concat({"'", value, "' is too large"}));
+    if (value.empty() || error != std::errc() || end != value.data() + value.size())
+        return invalid(key, concat({"expected a non-negative integer, got '", value, "'"}));
+    if (parsed < min || parsed > max)
+        return invalid(
+                key,
+                concat({"must be in [",
+                        std::to_string(min),
+                        ", ",
+                        std::to_string(max),
+                        "], got ",
+                        value}));
+    return parsed;
+}
+
+Result<double> ParamReader::real(std::string_view key, double min, double max) const {
+    const std::string_view value = text(key);
+    double parsed = 0.0;
+    const auto [end, error] = std::from_chars(value.data(), value.data() + value.size(), parsed);
+    if (value.empty() || error != std::errc() || end != value.data() + value.size() ||
+        !std::isfinite(parsed))
+        return invalid(key, concat({"expected a finite number, got '", value, "'"}));
+    if (parsed < min || parsed > max)
+        return invalid(
+                key,
+                concat({"must be in [", shortest(min), ", ", shortest(max), "], got ", value}));
+    return parsed;
+}
+
+Status ParamReader::invalid(std::string_view key, std::string_view why) const {
+    return Status(
+            ErrorCode::InvalidArgument, concat({mGenerator, ": parameter '", key, "': ", why}));
+}
+
+TriangleBatcher::TriangleBatcher(ISceneSink& sink, PrototypeId prototype)
+    : mSink(sink)
+    , mPrototype(prototype) {
+    mBatch.reserve(kBatchTriangles);
+}
+
+Status TriangleBatcher::flush() {
+    if (mBatch.empty())
+        return Status::ok();
+    FF_RETURN_IF_ERROR(mSink.addTriangles(mPrototype, mBatch));
+    mSent += mBatch.size();
+    mBatch.clear();
+    return Status::ok();
+}
+
+storage::PackedVertex packVertex(const SourceVertex& v) noexcept {
+    // Mirrors packVertex in SceneSink.cpp for the usable-normal case; the terrain asserts that
+    // the two agree in Debug builds.
+    storage::PackedVertex out{};
+    out.position = {v.position.x, v.position.y, v.position.z};
+    out.normalOct = storage::encodeOctNormal(v.normal.x, v.normal.y, v.normal.z);
+    out.color = {
+            storage::linearToSrgb8(v.color.r),
+            storage::linearToSrgb8(v.color.g),
+            storage::linearToSrgb8(v.color.b),
+            storage::toUnorm8(v.color.a)};
+    return out;
+}
+
+glm::mat4 makeTransform(const glm::vec3& translation, double yawTurns, float scale) noexcept {
+    const SinCos r = sinCosTurns(yawTurns);
+    const float c = static_cast<float>(r.cos) * scale;
+    const float s = static_cast<float>(r.sin) * scale;
+    glm::mat4 m(1.0f);
+    m[0] = glm::vec4(c, 0.0f, -s, 0.0f); // rotation about +Y (right-handed, Y up)
+    m[1] = glm::vec4(0.0f, scale, 0.0f, 0.0f);
+    m[2] = glm::vec4(s, 0.0f, c, 0.0f);
+    m[3] = glm::vec4(translation, 1.0f);
+    return m;
+}
+
+} // namespace ff::builder::generators
