@@ -47,10 +47,14 @@ inline PageTrailer readTrailer(std::span<const std::byte> page) noexcept {
 /** "Nodes", "Geometry", ... or "unknown". */
 inline const char* pageTypeName(std::uint16_t type) noexcept {
     switch (static_cast<PageType>(type)) {
-    case PageType::Header: return "Header";
-    case PageType::Nodes: return "Nodes";
-    case PageType::Geometry: return "Geometry";
-    case PageType::Table: return "Table";
+    case PageType::Header:
+        return "Header";
+    case PageType::Nodes:
+        return "Nodes";
+    case PageType::Geometry:
+        return "Geometry";
+    case PageType::Table:
+        return "Table";
     }
     return "unknown";
 }

@@ -79,8 +79,8 @@ Status checkIntact(std::span<const std::byte> page, std::uint64_t index) {
     if (trailer.magic != kPageTrailerMagic)
         return corrupt(
                 index,
-                "bad trailer magic " + hex(trailer.magic) + " (expected " +
-                        hex(kPageTrailerMagic) + ")");
+                "bad trailer magic " + hex(trailer.magic) + " (expected " + hex(kPageTrailerMagic) +
+                        ")");
     const std::uint64_t computed = pageChecksum(page);
     if (trailer.checksum != computed)
         return corrupt(
@@ -100,8 +100,8 @@ Status checkType(std::uint16_t type, std::uint64_t index, PageTypeMask expected)
         return Status::ok();
     return corrupt(
             index,
-            "expected a " + maskName(expected) + " page, found " + pageTypeName(type) +
-                    " (type " + std::to_string(type) + ")");
+            "expected a " + maskName(expected) + " page, found " + pageTypeName(type) + " (type " +
+                    std::to_string(type) + ")");
 }
 
 std::string truncatedMessage(std::uint64_t fileSize) {
@@ -230,7 +230,8 @@ Status SceneFile::Impl::openHeader() {
 
     // Magic and version come first and never move, so any future version is recognised as such
     // before the rest of the header (page size, trailer) is trusted.
-    std::memcpy(&header, bytes.data(), std::min<std::size_t>(bytes.size(), sizeof(FileHeader)));
+    if (!bytes.empty())
+        std::memcpy(&header, bytes.data(), std::min(bytes.size(), sizeof(FileHeader)));
     if (size >= sizeof(header.magic) && header.magic != kFileMagic)
         return corrupt(0, "bad magic (not a farfield scene file)");
     if (size < sizeof(FileHeader))
@@ -265,8 +266,7 @@ Status SceneFile::Impl::openHeader() {
             return corrupt(
                     0,
                     std::string(s.name) + " is " + std::to_string(s.stored) + ", version " +
-                            std::to_string(kFormatVersion) + " has " +
-                            std::to_string(s.expected));
+                            std::to_string(kFormatVersion) + " has " + std::to_string(s.expected));
     }
     if (header.flags != 0)
         return {ErrorCode::Unsupported, "page 0: unknown header flags " + hex(header.flags)};
@@ -285,9 +285,9 @@ Status SceneFile::Impl::openHeader() {
     if (size > expectedSize)
         return corrupt(
                 pageCount,
-                std::to_string(size - expectedSize) + " bytes past the last page (the header says " +
-                        std::to_string(pageCount) + " pages of " + std::to_string(pageSize) +
-                        " bytes)");
+                std::to_string(size - expectedSize) +
+                        " bytes past the last page (the header says " + std::to_string(pageCount) +
+                        " pages of " + std::to_string(pageSize) + " bytes)");
 
     nodesPerPage = ff::storage::nodesPerPage(pageSize);
     trianglesPerPage = ff::storage::trianglesPerPage(pageSize);
@@ -302,7 +302,8 @@ Status SceneFile::Impl::openHeader() {
     sections.resize(header.sectionCount);
     if (!sections.empty())
         std::memcpy(
-                sections.data(), page(0).data() + sizeof(FileHeader),
+                sections.data(),
+                page(0).data() + sizeof(FileHeader),
                 sections.size() * sizeof(SectionEntry));
     if (std::string problem = findSectionTableProblem(sections, pageCount, pageSize);
         !problem.empty())
@@ -352,7 +353,8 @@ Status SceneFile::Impl::readSections() {
             FF_RETURN_IF_ERROR(readStream(s, stream));
             metadata.assign(reinterpret_cast<const char*>(stream.data()), stream.size());
             break;
-        case SectionType::Hierarchy: break;
+        case SectionType::Hierarchy:
+            break;
         }
     }
     // After the loop: the instance section may come before the prototype section.
@@ -373,12 +375,13 @@ Status SceneFile::Impl::readSections() {
     return Status::ok();
 }
 
-SceneFile::SceneFile(std::unique_ptr<Impl> impl) : mImpl(std::move(impl)) {}
+SceneFile::SceneFile(std::unique_ptr<Impl> impl)
+    : mImpl(std::move(impl)) {}
 
 SceneFile::~SceneFile() = default;
 
-Result<std::unique_ptr<SceneFile>> SceneFile::open(
-        const std::filesystem::path& path, const SceneFileOptions& options) {
+Result<std::unique_ptr<SceneFile>>
+SceneFile::open(const std::filesystem::path& path, const SceneFileOptions& options) {
     auto impl = std::make_unique<Impl>();
     impl->path = path;
     const std::string name = path.string();
@@ -412,15 +415,25 @@ Result<std::unique_ptr<SceneFile>> SceneFile::open(
 
 // ---- accessors ----------------------------------------------------------------------------
 
-const FileHeader& SceneFile::header() const noexcept { return mImpl->header; }
+const FileHeader& SceneFile::header() const noexcept {
+    return mImpl->header;
+}
 
-std::span<const SectionEntry> SceneFile::sections() const noexcept { return mImpl->sections; }
+std::span<const SectionEntry> SceneFile::sections() const noexcept {
+    return mImpl->sections;
+}
 
-std::uint32_t SceneFile::pageSize() const noexcept { return mImpl->pageSize; }
+std::uint32_t SceneFile::pageSize() const noexcept {
+    return mImpl->pageSize;
+}
 
-std::uint64_t SceneFile::pageCount() const noexcept { return mImpl->pageCount; }
+std::uint64_t SceneFile::pageCount() const noexcept {
+    return mImpl->pageCount;
+}
 
-const std::filesystem::path& SceneFile::path() const noexcept { return mImpl->path; }
+const std::filesystem::path& SceneFile::path() const noexcept {
+    return mImpl->path;
+}
 
 const std::vector<PrototypeRecord>& SceneFile::prototypes() const noexcept {
     return mImpl->prototypes;
@@ -430,14 +443,16 @@ const std::vector<InstanceRecord>& SceneFile::instances() const noexcept {
     return mImpl->instances;
 }
 
-const std::string& SceneFile::metadataJson() const noexcept { return mImpl->metadata; }
+const std::string& SceneFile::metadataJson() const noexcept {
+    return mImpl->metadata;
+}
 
 Status SceneFile::verifyPage(std::uint64_t index, PageType expected) const {
     return mImpl->verify(index, maskOf(expected));
 }
 
-Result<std::span<const std::byte>> SceneFile::pagePayload(
-        std::uint64_t index, PageType expected) const {
+Result<std::span<const std::byte>>
+SceneFile::pagePayload(std::uint64_t index, PageType expected) const {
     FF_RETURN_IF_ERROR(mImpl->verify(index, maskOf(expected)));
     return mImpl->page(index).first(pagePayloadBytes(mImpl->pageSize));
 }
@@ -448,8 +463,8 @@ std::string SceneFile::Impl::geometryRunProblem(const NodeRecord& node) const {
     if (node.geometryCount == 0)
         return {};
     const std::string run = "geometry run of " + std::to_string(node.geometryCount) +
-                            " triangles from page " + std::to_string(node.geometryPage) +
-                            " slot " + std::to_string(node.geometryFirst);
+                            " triangles from page " + std::to_string(node.geometryPage) + " slot " +
+                            std::to_string(node.geometryFirst);
     if (node.geometryPage == 0 || node.geometryPage >= pageCount)
         return run + ": page outside the file (" + std::to_string(pageCount) + " pages)";
     if (node.geometryFirst >= trianglesPerPage)
@@ -460,8 +475,8 @@ std::string SceneFile::Impl::geometryRunProblem(const NodeRecord& node) const {
             node.geometryPage +
             (std::uint64_t{node.geometryFirst} + node.geometryCount - 1) / trianglesPerPage;
     if (lastPage >= pageCount)
-        return run + ": ends on page " + std::to_string(lastPage) +
-               ", past the end of the file (" + std::to_string(pageCount) + " pages)";
+        return run + ": ends on page " + std::to_string(lastPage) + ", past the end of the file (" +
+               std::to_string(pageCount) + " pages)";
     return {};
 }
 
@@ -529,7 +544,8 @@ Result<NodeRecord> SceneFile::child(const NodeRecord& parent, std::uint32_t inde
 
 // ---- geometry -----------------------------------------------------------------------------
 
-Status SceneFile::geometrySegments(const NodeRecord& node, std::vector<GeometrySegment>& out) const {
+Status
+SceneFile::geometrySegments(const NodeRecord& node, std::vector<GeometrySegment>& out) const {
     const Impl& f = *mImpl;
     if (node.kind != static_cast<std::uint8_t>(NodeKind::Cell) || node.geometryCount == 0)
         return Status::ok();
@@ -568,7 +584,8 @@ Result<std::span<const std::byte>> SceneFile::segmentBytes(const GeometrySegment
 
 // ---- verification -------------------------------------------------------------------------
 
-Status SceneFile::verifyAll(const std::function<void(std::uint64_t, std::uint64_t)>& progress) const {
+Status
+SceneFile::verifyAll(const std::function<void(std::uint64_t, std::uint64_t)>& progress) const {
     const Impl& f = *mImpl;
     if (progress)
         progress(0, f.pageCount);

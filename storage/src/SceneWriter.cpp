@@ -62,7 +62,7 @@ struct SceneWriter::Impl {
     std::filesystem::path tempPath;
     std::uint32_t pageSize = 0;
     int fd = -1;
-    std::uint64_t nextPage = 1;  ///< page 0 is written by commit()
+    std::uint64_t nextPage = 1;     ///< page 0 is written by commit()
     std::uint64_t flushedPages = 1; ///< pages [1, flushedPages) are in the file
     std::vector<std::byte> buffer;  ///< pages [flushedPages, nextPage)
     std::size_t bufferedBytes = 0;
@@ -113,12 +113,13 @@ struct SceneWriter::Impl {
     }
 };
 
-SceneWriter::SceneWriter(std::unique_ptr<Impl> impl) : mImpl(std::move(impl)) {}
+SceneWriter::SceneWriter(std::unique_ptr<Impl> impl)
+    : mImpl(std::move(impl)) {}
 
 SceneWriter::~SceneWriter() = default;
 
-Result<std::unique_ptr<SceneWriter>> SceneWriter::create(
-        const std::filesystem::path& finalPath, const SceneWriterOptions& options) {
+Result<std::unique_ptr<SceneWriter>>
+SceneWriter::create(const std::filesystem::path& finalPath, const SceneWriterOptions& options) {
     if (!isValidPageSize(options.pageSize))
         return Status{
                 ErrorCode::InvalidArgument,
@@ -154,9 +155,13 @@ Result<std::unique_ptr<SceneWriter>> SceneWriter::create(
     return std::unique_ptr<SceneWriter>(new SceneWriter(std::move(impl)));
 }
 
-std::uint32_t SceneWriter::pageSize() const noexcept { return mImpl->pageSize; }
+std::uint32_t SceneWriter::pageSize() const noexcept {
+    return mImpl->pageSize;
+}
 
-std::uint64_t SceneWriter::nextPageIndex() const noexcept { return mImpl->nextPage; }
+std::uint64_t SceneWriter::nextPageIndex() const noexcept {
+    return mImpl->nextPage;
+}
 
 const std::filesystem::path& SceneWriter::temporaryPath() const noexcept {
     return mImpl->tempPath;
@@ -176,8 +181,8 @@ Result<std::uint64_t> SceneWriter::appendPage(PageType type, std::span<const std
         return Status{
                 ErrorCode::InvalidArgument,
                 "page payload of " + std::to_string(payload.size()) + " bytes exceeds the " +
-                        std::to_string(payloadBytes) + " bytes of a " +
-                        std::to_string(w.pageSize) + "-byte page"};
+                        std::to_string(payloadBytes) + " bytes of a " + std::to_string(w.pageSize) +
+                        "-byte page"};
     if (w.nextPage > std::numeric_limits<std::uint32_t>::max())
         return Status{
                 ErrorCode::Unsupported,
@@ -210,8 +215,8 @@ Result<SectionEntry> SceneWriter::appendSection(
         (bytes.size() % recordSize != 0 || bytes.size() / recordSize != itemCount))
         return Status{
                 ErrorCode::InvalidArgument,
-                std::string(sectionTypeName(typeValue)) + " section: " +
-                        std::to_string(bytes.size()) + " bytes do not hold " +
+                std::string(sectionTypeName(typeValue)) +
+                        " section: " + std::to_string(bytes.size()) + " bytes do not hold " +
                         std::to_string(itemCount) + " records of " + std::to_string(recordSize) +
                         " bytes"};
 
@@ -240,9 +245,8 @@ Status SceneWriter::commit(FileHeader header, std::span<const SectionEntry> sect
     if (sections.size() > maxSections)
         return w.fail(
                 {ErrorCode::InvalidArgument,
-                 "cannot commit " + w.finalPath.string() + ": " +
-                         std::to_string(sections.size()) + " sections, page 0 holds at most " +
-                         std::to_string(maxSections)});
+                 "cannot commit " + w.finalPath.string() + ": " + std::to_string(sections.size()) +
+                         " sections, page 0 holds at most " + std::to_string(maxSections)});
     const std::string problem = findSectionTableProblem(sections, w.nextPage, w.pageSize);
     if (!problem.empty())
         return w.fail(
@@ -279,13 +283,10 @@ Status SceneWriter::commit(FileHeader header, std::span<const SectionEntry> sect
         return w.fail(posixError(errno, "cannot close " + w.tempPath.string()));
     if (::rename(w.tempPath.c_str(), w.finalPath.c_str()) != 0)
         return w.fail(posixError(
-                errno,
-                "cannot rename " + w.tempPath.string() + " to " + w.finalPath.string()));
+                errno, "cannot rename " + w.tempPath.string() + " to " + w.finalPath.string()));
     w.committed = true;
     if (const int err = syncDirectory(w.finalPath.parent_path()); err != 0)
-        return posixError(
-                err,
-                "wrote " + w.finalPath.string() + " but cannot sync its directory");
+        return posixError(err, "wrote " + w.finalPath.string() + " but cannot sync its directory");
     return Status::ok();
 }
 

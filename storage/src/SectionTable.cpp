@@ -6,20 +6,27 @@ namespace ff::storage {
 
 const char* sectionTypeName(std::uint32_t type) noexcept {
     switch (static_cast<SectionType>(type)) {
-    case SectionType::Prototypes: return "Prototypes";
-    case SectionType::Instances: return "Instances";
-    case SectionType::Metadata: return "Metadata";
-    case SectionType::Hierarchy: return "Hierarchy";
+    case SectionType::Prototypes:
+        return "Prototypes";
+    case SectionType::Instances:
+        return "Instances";
+    case SectionType::Metadata:
+        return "Metadata";
+    case SectionType::Hierarchy:
+        return "Hierarchy";
     }
     return "unknown";
 }
 
 std::size_t sectionRecordSize(std::uint32_t type) noexcept {
     switch (static_cast<SectionType>(type)) {
-    case SectionType::Prototypes: return sizeof(PrototypeRecord);
-    case SectionType::Instances: return sizeof(InstanceRecord);
+    case SectionType::Prototypes:
+        return sizeof(PrototypeRecord);
+    case SectionType::Instances:
+        return sizeof(InstanceRecord);
     case SectionType::Metadata:
-    case SectionType::Hierarchy: return 0;
+    case SectionType::Hierarchy:
+        return 0;
     }
     return 0;
 }
@@ -30,9 +37,7 @@ std::uint64_t sectionPagesFor(std::uint64_t byteLength, std::uint32_t pageSize) 
 }
 
 std::string findSectionTableProblem(
-        std::span<const SectionEntry> sections,
-        std::uint64_t pageCount,
-        std::uint32_t pageSize) {
+        std::span<const SectionEntry> sections, std::uint64_t pageCount, std::uint32_t pageSize) {
     constexpr std::uint32_t kTypeCount = 4;
     bool seen[kTypeCount + 1] = {};
     for (std::size_t i = 0; i < sections.size(); ++i) {

@@ -28,8 +28,6 @@ std::uint64_t sectionPagesFor(std::uint64_t byteLength, std::uint32_t pageSize) 
  * (Instances): ...") or an empty string.
  */
 std::string findSectionTableProblem(
-        std::span<const SectionEntry> sections,
-        std::uint64_t pageCount,
-        std::uint32_t pageSize);
+        std::span<const SectionEntry> sections, std::uint64_t pageCount, std::uint32_t pageSize);
 
 } // namespace ff::storage
