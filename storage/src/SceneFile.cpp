@@ -32,10 +32,10 @@ constexpr PageTypeMask maskOf(PageType type) noexcept {
 
 constexpr PageTypeMask kHierarchyPages = maskOf(PageType::Nodes) | maskOf(PageType::Geometry);
 
-// verified[] states: 0 = not verified yet, kIntactUnknownType = intact page whose trailer type
-// does not fit a byte, anything else = intact page of that type.
+// verified[] states. The page type is not cached: it is checked on every access (16 bytes), so
+// one intact page can be asked for under any expected type and get the right answer.
 constexpr std::uint8_t kUnverified = 0;
-constexpr std::uint8_t kIntactUnknownType = 0xFF;
+constexpr std::uint8_t kIntact = 1;
 
 // verifyAll() reports progress after this many pages.
 constexpr std::uint64_t kProgressInterval = 256;
@@ -151,9 +151,9 @@ struct SceneFile::Impl {
     std::uint64_t pageCount = 0;
     std::uint32_t nodesPerPage = 0;
     std::uint32_t trianglesPerPage = 0;
-    /** Per page: kUnverified or the type of an intact page. Written once a page is verified;
-     *  racing verifiers compute the same value, so relaxed ordering over immutable bytes would
-     *  do; acquire/release keeps the reasoning simple. */
+    /** Per page: kUnverified or kIntact (trailer magic, checksum and index passed). Racing
+     *  verifiers of one page compute the same answer over immutable bytes and store the same
+     *  value, so the only shared state is this byte. */
     std::unique_ptr<std::atomic<std::uint8_t>[]> verified;
     std::vector<PrototypeRecord> prototypes;
     std::vector<InstanceRecord> instances;
@@ -169,15 +169,9 @@ struct SceneFile::Impl {
             return corrupt(
                     index,
                     "beyond end of file (the file has " + std::to_string(pageCount) + " pages)");
-        std::uint8_t state = verified[index].load(std::memory_order_acquire);
-        if (state == kUnverified) {
-            const std::span<const std::byte> bytesOfPage = page(index);
-            FF_RETURN_IF_ERROR(checkIntact(bytesOfPage, index));
-            const std::uint16_t type = readTrailer(bytesOfPage).pageType;
-            state = type != kUnverified && type < kIntactUnknownType
-                            ? static_cast<std::uint8_t>(type)
-                            : kIntactUnknownType;
-            verified[index].store(state, std::memory_order_release);
+        if (verified[index].load(std::memory_order_acquire) == kUnverified) {
+            FF_RETURN_IF_ERROR(checkIntact(page(index), index));
+            verified[index].store(kIntact, std::memory_order_release);
         }
         return checkType(readTrailer(page(index)).pageType, index, expected);
     }
@@ -292,7 +286,7 @@ Status SceneFile::Impl::openHeader() {
     nodesPerPage = ff::storage::nodesPerPage(pageSize);
     trianglesPerPage = ff::storage::trianglesPerPage(pageSize);
     verified = std::make_unique<std::atomic<std::uint8_t>[]>(static_cast<std::size_t>(pageCount));
-    verified[0].store(static_cast<std::uint8_t>(PageType::Header), std::memory_order_release);
+    verified[0].store(kIntact, std::memory_order_release);
 
     if (header.sectionCount > maxSectionCount(pageSize))
         return corrupt(
