@@ -1,0 +1,89 @@
+#include "SectionTable.h"
+
+#include <string>
+
+namespace ff::storage {
+
+const char* sectionTypeName(std::uint32_t type) noexcept {
+    switch (static_cast<SectionType>(type)) {
+    case SectionType::Prototypes:
+        return "Prototypes";
+    case SectionType::Instances:
+        return "Instances";
+    case SectionType::Metadata:
+        return "Metadata";
+    case SectionType::Hierarchy:
+        return "Hierarchy";
+    }
+    return "unknown";
+}
+
+std::size_t sectionRecordSize(std::uint32_t type) noexcept {
+    switch (static_cast<SectionType>(type)) {
+    case SectionType::Prototypes:
+        return sizeof(PrototypeRecord);
+    case SectionType::Instances:
+        return sizeof(InstanceRecord);
+    case SectionType::Metadata:
+    case SectionType::Hierarchy:
+        return 0;
+    }
+    return 0;
+}
+
+std::uint64_t sectionPagesFor(std::uint64_t byteLength, std::uint32_t pageSize) noexcept {
+    const std::uint64_t payload = pagePayloadBytes(pageSize);
+    return byteLength / payload + (byteLength % payload != 0 ? 1 : 0);
+}
+
+std::string findSectionTableProblem(
+        std::span<const SectionEntry> sections, std::uint64_t pageCount, std::uint32_t pageSize) {
+    constexpr std::uint32_t kTypeCount = 4;
+    bool seen[kTypeCount + 1] = {};
+    for (std::size_t i = 0; i < sections.size(); ++i) {
+        const SectionEntry& s = sections[i];
+        const std::string name =
+                "section " + std::to_string(i) + " (" + sectionTypeName(s.type) + ")";
+        if (s.type == 0 || s.type > kTypeCount)
+            return name + ": unknown section type " + std::to_string(s.type);
+        if (seen[s.type])
+            return name + ": duplicate section type";
+        seen[s.type] = true;
+
+        // [firstPage, firstPage + pageCount) inside [1, pageCount), written without overflow.
+        if (s.firstPage < 1 || s.firstPage > pageCount || s.pageCount > pageCount - s.firstPage)
+            return name + ": pages [" + std::to_string(s.firstPage) + ", +" +
+                   std::to_string(s.pageCount) + ") outside the file's pages [1, " +
+                   std::to_string(pageCount) + ")";
+
+        if (static_cast<SectionType>(s.type) == SectionType::Hierarchy) {
+            if (s.byteLength != 0)
+                return name + ": byte length " + std::to_string(s.byteLength) +
+                       " (a hierarchy section has no byte stream)";
+        } else {
+            const std::uint64_t needed = sectionPagesFor(s.byteLength, pageSize);
+            if (s.pageCount != needed)
+                return name + ": " + std::to_string(s.byteLength) + " bytes need " +
+                       std::to_string(needed) + " pages, the entry says " +
+                       std::to_string(s.pageCount);
+            const std::size_t recordSize = sectionRecordSize(s.type);
+            if (recordSize != 0 &&
+                (s.byteLength % recordSize != 0 || s.byteLength / recordSize != s.itemCount))
+                return name + ": " + std::to_string(s.byteLength) + " bytes do not hold " +
+                       std::to_string(s.itemCount) + " records of " + std::to_string(recordSize) +
+                       " bytes";
+        }
+
+        for (std::size_t j = 0; j < i; ++j) {
+            const SectionEntry& o = sections[j];
+            const bool disjoint = s.firstPage + s.pageCount <= o.firstPage ||
+                                  o.firstPage + o.pageCount <= s.firstPage;
+            if (!disjoint && s.pageCount != 0 && o.pageCount != 0)
+                return name + ": pages overlap section " + std::to_string(j) + " (" +
+                       sectionTypeName(o.type) + ")";
+        }
+    }
+    return {};
+}
+
+} // namespace ff::storage

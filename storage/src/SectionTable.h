@@ -1,0 +1,33 @@
+#pragma once
+
+// Rules for the section table in page 0 (FORMAT.md "Section table"), shared by the writer (which
+// refuses to commit a table the reader would reject) and the reader.
+
+#include <ff/storage/SceneFormat.h>
+
+#include <cstddef>
+#include <cstdint>
+#include <span>
+#include <string>
+
+namespace ff::storage {
+
+/** "Prototypes", "Instances", "Metadata", "Hierarchy" or "unknown". */
+const char* sectionTypeName(std::uint32_t type) noexcept;
+
+/** Bytes per item of a record section (Prototypes, Instances); 0 for the others. */
+std::size_t sectionRecordSize(std::uint32_t type) noexcept;
+
+/** Table pages needed for a stream of `byteLength` bytes. */
+std::uint64_t sectionPagesFor(std::uint64_t byteLength, std::uint32_t pageSize) noexcept;
+
+/**
+ * Checks `sections` for a file of `pageCount` pages of `pageSize` bytes: known and distinct
+ * types, page ranges inside [1, pageCount), disjoint ranges, byte lengths that fill exactly
+ * their pages, item counts matching record sizes. Returns the first problem ("section 1
+ * (Instances): ...") or an empty string.
+ */
+std::string findSectionTableProblem(
+        std::span<const SectionEntry> sections, std::uint64_t pageCount, std::uint32_t pageSize);
+
+} // namespace ff::storage
