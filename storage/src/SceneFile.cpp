@@ -492,8 +492,6 @@ Result<NodeRecord> SceneFile::node(NodeRef ref) const {
     constexpr std::uint8_t kKnownFlags = kNodeHasCube | kNodeOctreeChildren;
     if ((n.flags & ~kKnownFlags) != 0)
         return corrupt(ref.page, at + "unknown node flags " + hex(n.flags));
-    if (n.octant > 7)
-        return corrupt(ref.page, at + "octant " + std::to_string(n.octant) + " out of range");
     if (!allFinite(n.cellMin) || !allFinite(n.cellMax) || !allFinite(n.boundsMin) ||
         !allFinite(n.boundsMax))
         return corrupt(ref.page, at + "non-finite bounds");

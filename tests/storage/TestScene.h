@@ -178,13 +178,11 @@ inline TestScene makeTestScene(std::uint32_t pageSize) {
 
     NodeRecord leaf0 = makeCell(0.0f, 2.0f);
     leaf0.flags |= kNodeOctreeChildren;
-    leaf0.octant = 0;
     leaf0.level = 2;
     leaf0.geometryPage = g0 + 2;
     leaf0.geometryFirst = 24;
     leaf0.geometryCount = 10;
     NodeRecord leaf1 = leaf0;
-    leaf1.octant = 7;
     leaf1.geometryFirst = 34;
     leaf1.geometryCount = 3;
     s.nodesB = {leaf0, leaf1};

@@ -433,13 +433,13 @@ TEST_F(SceneFileTest, HeaderFieldsAreChecked) {
              "page 0: page count 4294967297 out of range"},
             {16, 12, 8, ErrorCode::Corrupt, "page 11: beyond end of file"},
             {16, 10, 8, ErrorCode::Corrupt, "page 10: 4096 bytes past the last page"},
-            {24, 160, 4, ErrorCode::Corrupt, "page 0: headerSize is 160, version 1 has 144"},
-            {32, 96, 4, ErrorCode::Corrupt, "page 0: nodeRecordSize is 96, version 1 has 100"},
+            {24, 144, 4, ErrorCode::Corrupt, "page 0: headerSize is 144, version 1 has 160"},
+            {32, 100, 4, ErrorCode::Corrupt, "page 0: nodeRecordSize is 100, version 1 has 96"},
             {44, 57, 4, ErrorCode::Corrupt, "page 0: instanceRecordSize is 57"},
             {48, 99, 4, ErrorCode::Corrupt, "page 0: 99 sections, page 0 holds at most 98"},
             {52, 1, 4, ErrorCode::Unsupported, "page 0: unknown header flags 0x1"},
             {56, 11, 4, ErrorCode::Corrupt, "page 0: root node (page 11, slot 0) outside"},
-            {60, 40, 4, ErrorCode::Corrupt, "page 0: root node (page 1, slot 40) outside"},
+            {60, 42, 4, ErrorCode::Corrupt, "page 0: root node (page 1, slot 42) outside"},
     };
     for (const Case& c : cases) {
         SCOPED_TRACE(c.prefix);
@@ -456,7 +456,7 @@ TEST_F(SceneFileTest, HeaderFieldsAreChecked) {
 
 TEST_F(SceneFileTest, SectionTableIsChecked) {
     const std::vector<std::byte> good = writeScene(kSmallPage);
-    // Section i's entry starts at 144 + 40 * i: type +0, firstPage +8, pageCount +16,
+    // Section i's entry starts at 160 + 40 * i: type +0, firstPage +8, pageCount +16,
     // byteLength +24, itemCount +32. Sections: 0 Prototypes, 1 Instances, 2 Metadata, 3 Hierarchy.
     struct Case {
         std::size_t offset;
@@ -465,20 +465,20 @@ TEST_F(SceneFileTest, SectionTableIsChecked) {
         std::string prefix;
     };
     const Case cases[] = {
-            {144, 9, 4, "page 0: section 0 (unknown): unknown section type 9"},
-            {144 + 40, 1, 4, "page 0: section 1 (Prototypes): duplicate section type"},
-            {144 + 8, 0, 8, "page 0: section 0 (Prototypes): pages [0, +1) outside"},
-            {144 + 40 + 8, 10, 8, "page 0: section 1 (Instances): pages [10, +2) outside"},
-            {144 + 40 + 16, 5, 8, "page 0: section 1 (Instances): pages [7, +5) outside"},
-            {144 + 40 + 16,
+            {160, 9, 4, "page 0: section 0 (unknown): unknown section type 9"},
+            {160 + 40, 1, 4, "page 0: section 1 (Prototypes): duplicate section type"},
+            {160 + 8, 0, 8, "page 0: section 0 (Prototypes): pages [0, +1) outside"},
+            {160 + 40 + 8, 10, 8, "page 0: section 1 (Instances): pages [10, +2) outside"},
+            {160 + 40 + 16, 5, 8, "page 0: section 1 (Instances): pages [7, +5) outside"},
+            {160 + 40 + 16,
              3,
              8,
              "page 0: section 1 (Instances): 4144 bytes need 2 pages, the "
              "entry says 3"},
-            {144 + 40 + 24, 8200, 8, "page 0: section 1 (Instances): 8200 bytes need 3 pages"},
-            {144 + 40 + 32, 5, 8, "page 0: section 1 (Instances): 4144 bytes do not hold 5"},
-            {144 + 80 + 8, 6, 8, "page 0: section 2 (Metadata): pages overlap section 0"},
-            {144 + 120 + 24, 1, 8, "page 0: section 3 (Hierarchy): byte length 1"},
+            {160 + 40 + 24, 8200, 8, "page 0: section 1 (Instances): 8200 bytes need 3 pages"},
+            {160 + 40 + 32, 5, 8, "page 0: section 1 (Instances): 4144 bytes do not hold 5"},
+            {160 + 80 + 8, 6, 8, "page 0: section 2 (Metadata): pages overlap section 0"},
+            {160 + 120 + 24, 1, 8, "page 0: section 3 (Hierarchy): byte length 1"},
     };
     for (const Case& c : cases) {
         SCOPED_TRACE(c.prefix);
@@ -531,7 +531,7 @@ TEST_F(SceneFileTest, NodeRejectsOutOfRangeRefs) {
         std::string message;
     };
     const Case cases[] = {
-            {{1, n}, "page 1: node slot 40 out of range (a Nodes page holds 40)"},
+            {{1, n}, "page 1: node slot 42 out of range (a Nodes page holds 42)"},
             {{1, 0xFFFFFFFFu}, "page 1: node slot 4294967295 out of range"},
             {{11, 0}, "page 11: beyond end of file (the file has 11 pages)"},
             {{0xFFFFFFFFu, 0}, "page 4294967295: beyond end of file"},
@@ -592,7 +592,7 @@ TEST_P(MalformedNodeTest, NodeRejectsIt) {
 }
 
 const std::uint32_t kT = trianglesPerPage(kSmallPage); // 68
-const std::uint32_t kN = nodesPerPage(kSmallPage);     // 40
+const std::uint32_t kN = nodesPerPage(kSmallPage);     // 42
 
 INSTANTIATE_TEST_SUITE_P(
         Records,
@@ -603,14 +603,14 @@ INSTANTIATE_TEST_SUITE_P(
                         [](TestScene&, NodeRecord& n) {
                             n.firstChild = {2, kN - 1};
                         },
-                        "page 1: node slot 1: children in slots [39, 41) cross the end of Nodes "
-                        "page 2 (40 slots)"},
+                        "page 1: node slot 1: children in slots [41, 43) cross the end of Nodes "
+                        "page 2 (42 slots)"},
                 MalformedNodeCase{
                         "ChildrenSlotPastThePage",
                         [](TestScene&, NodeRecord& n) {
                             n.firstChild = {2, kN};
                         },
-                        "page 1: node slot 1: children in slots [40, 42) cross the end"},
+                        "page 1: node slot 1: children in slots [42, 44) cross the end"},
                 MalformedNodeCase{
                         "ChildrenPageOutsideTheFile",
                         [](TestScene&, NodeRecord& n) {
@@ -658,10 +658,6 @@ INSTANTIATE_TEST_SUITE_P(
                         "UnknownFlags",
                         [](TestScene&, NodeRecord& n) { n.flags = 0x80; },
                         "page 1: node slot 1: unknown node flags 0x80"},
-                MalformedNodeCase{
-                        "OctantOutOfRange",
-                        [](TestScene&, NodeRecord& n) { n.octant = 8; },
-                        "page 1: node slot 1: octant 8 out of range"},
                 MalformedNodeCase{
                         "NaNBounds",
                         [](TestScene&, NodeRecord& n) {

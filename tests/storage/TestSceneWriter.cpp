@@ -128,19 +128,19 @@ TEST_F(SceneWriterTest, PageBytesFollowTheDocumentedLayout) {
     EXPECT_EQ(test::loadAt<std::uint32_t>(bytes, 8), kFormatVersion);
     EXPECT_EQ(test::loadAt<std::uint32_t>(bytes, 12), kSmallPage);
     EXPECT_EQ(test::loadAt<std::uint64_t>(bytes, 16), 3u);
-    EXPECT_EQ(test::loadAt<std::uint32_t>(bytes, 24), 144u);
+    EXPECT_EQ(test::loadAt<std::uint32_t>(bytes, 24), 160u);
     EXPECT_EQ(test::loadAt<std::uint32_t>(bytes, 28), 40u);
-    EXPECT_EQ(test::loadAt<std::uint32_t>(bytes, 32), 100u);
+    EXPECT_EQ(test::loadAt<std::uint32_t>(bytes, 32), 96u);
     EXPECT_EQ(test::loadAt<std::uint32_t>(bytes, 36), 60u);
     EXPECT_EQ(test::loadAt<std::uint32_t>(bytes, 40), 48u);
     EXPECT_EQ(test::loadAt<std::uint32_t>(bytes, 44), 56u);
     EXPECT_EQ(test::loadAt<std::uint32_t>(bytes, 48), 1u);  // sectionCount
     EXPECT_EQ(test::loadAt<std::uint32_t>(bytes, 56), 2u);  // root.page
     EXPECT_EQ(test::loadAt<std::uint64_t>(bytes, 88), 1u);  // nodeCount
-    EXPECT_EQ(test::loadAt<std::uint32_t>(bytes, 144), 4u); // section 0 type: Hierarchy
-    EXPECT_EQ(test::loadAt<std::uint64_t>(bytes, 152), 1u); // firstPage
-    EXPECT_EQ(test::loadAt<std::uint64_t>(bytes, 160), 2u); // pageCount
-    for (std::size_t i = 144 + 40; i < kSmallPage - 16; ++i)
+    EXPECT_EQ(test::loadAt<std::uint32_t>(bytes, 160), 4u); // section 0 type: Hierarchy
+    EXPECT_EQ(test::loadAt<std::uint64_t>(bytes, 168), 1u); // firstPage
+    EXPECT_EQ(test::loadAt<std::uint64_t>(bytes, 176), 2u); // pageCount
+    for (std::size_t i = 160 + 40; i < kSmallPage - 16; ++i)
         ASSERT_EQ(bytes[i], std::byte{0}) << "page 0 byte " << i;
     // Trailers (FORMAT.md "Page layout").
     const std::uint16_t types[] = {1, 3, 2};
@@ -231,7 +231,7 @@ TEST_F(SceneWriterTest, CommitRefusesTooManySections) {
     auto writer = createOk();
     ASSERT_TRUE(writer);
     EXPECT_EQ(maxSectionCount(kSmallPage), 98u);
-    EXPECT_EQ(maxSectionCount(65536), (65520u - 144u) / 40u);
+    EXPECT_EQ(maxSectionCount(65536), (65520u - 160u) / 40u);
     EXPECT_EQ(maxSectionCount(1000), 0u);
     const std::vector<SectionEntry> sections(99);
     const Status s = writer->commit(FileHeader{}, sections);

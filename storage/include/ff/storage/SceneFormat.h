@@ -105,7 +105,7 @@ struct FileHeader {
     std::uint64_t instancedTriangles; ///< triangles as drawn (each instance counted)
     std::array<std::uint8_t, 48> reserved;
 };
-static_assert(sizeof(FileHeader) == 144);
+static_assert(sizeof(FileHeader) == 160);
 
 /** 0 = -X, 1 = +X, 2 = -Y, 3 = +Y, 4 = -Z, 5 = +Z: face f lies on axis f/2, side f%2. */
 inline constexpr int kCubeFaceCount = 6;
@@ -122,7 +122,7 @@ enum NodeFlags : std::uint8_t {
 };
 
 /**
- * One hierarchy node, 100 bytes, in a slot of a Nodes page. Children of a node are `childCount`
+ * One hierarchy node, 96 bytes, in a slot of a Nodes page. Children of a node are `childCount`
  * consecutive slots starting at `firstChild`, always inside one page.
  */
 struct NodeRecord {
@@ -143,7 +143,7 @@ struct NodeRecord {
     std::uint32_t geometryFirst;
     std::uint32_t geometryCount; ///< this node's own triangles (not its children's)
 };
-static_assert(sizeof(NodeRecord) == 100);
+static_assert(sizeof(NodeRecord) == 96);
 
 /** Vertex as drawn: position, octahedral-encoded normal (snorm16), sRGB8 colour + alpha. */
 struct PackedVertex {
