@@ -1,0 +1,54 @@
+#pragma once
+
+// The one door through which scene content enters the builder. Importers (glTF) and
+// generators (forest, terrain, ...) push prototypes, triangles and instances into an ISceneSink;
+// the builder behind it spills them to disk as they arrive, so no source ever has to
+// materialise a whole scene.
+
+#include <ff/storage/SceneFormat.h>
+#include <ff/storage/Status.h>
+
+#include <glm/glm.hpp>
+
+#include <cstdint>
+#include <span>
+#include <string_view>
+
+namespace ff::builder {
+
+using PrototypeId = std::uint32_t;
+
+/** A vertex as sources describe it: colour is linear RGBA (base colour x texture x vertex
+ *  colour). A zero or non-finite normal means "use the triangle's face normal". */
+struct SourceVertex {
+    glm::vec3 position{0.0f};
+    glm::vec3 normal{0.0f};
+    glm::vec4 color{1.0f};
+};
+
+/** Packs three vertices into the on-disk/GPU triangle layout (positions unchanged). */
+storage::PackedTriangle packTriangle(
+        const SourceVertex& a, const SourceVertex& b, const SourceVertex& c) noexcept;
+
+/**
+ * Receives a scene as a stream. Calls may interleave freely: triangles can be added to any
+ * declared prototype at any time; an instance may be added before its prototype has triangles.
+ * Triangles with non-finite positions or zero area are dropped and counted by the sink, so
+ * sources pass them through unchanged.
+ */
+class ISceneSink {
+public:
+    virtual ~ISceneSink() = default;
+
+    /** Declares a prototype (a mesh stored once). `name` is informational. */
+    [[nodiscard]] virtual Result<PrototypeId> addPrototype(std::string_view name) = 0;
+
+    /** Appends triangles, in the prototype's own coordinate frame. */
+    [[nodiscard]] virtual Status addTriangles(
+            PrototypeId prototype, std::span<const storage::PackedTriangle> triangles) = 0;
+
+    /** Places the prototype in the world with `transform` (affine, column-major glm). */
+    [[nodiscard]] virtual Status addInstance(PrototypeId prototype, const glm::mat4& transform) = 0;
+};
+
+} // namespace ff::builder

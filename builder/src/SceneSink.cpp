@@ -1,0 +1,36 @@
+#include <ff/builder/SceneSink.h>
+#include <ff/storage/VertexCodec.h>
+
+#include <cmath>
+
+namespace ff::builder {
+
+namespace {
+
+bool isUsableNormal(const glm::vec3& n) {
+    const float len2 = glm::dot(n, n);
+    return std::isfinite(len2) && len2 > 1e-12f;
+}
+
+storage::PackedVertex packVertex(const SourceVertex& v, const glm::vec3& faceNormal) {
+    const glm::vec3 n = isUsableNormal(v.normal) ? v.normal : faceNormal;
+    storage::PackedVertex out{};
+    out.position = {v.position.x, v.position.y, v.position.z};
+    out.normalOct = storage::encodeOctNormal(n.x, n.y, n.z);
+    out.color = {
+            storage::linearToSrgb8(v.color.r),
+            storage::linearToSrgb8(v.color.g),
+            storage::linearToSrgb8(v.color.b),
+            storage::toUnorm8(v.color.a)};
+    return out;
+}
+
+} // namespace
+
+storage::PackedTriangle packTriangle(
+        const SourceVertex& a, const SourceVertex& b, const SourceVertex& c) noexcept {
+    const glm::vec3 faceNormal = glm::cross(b.position - a.position, c.position - a.position);
+    return {{packVertex(a, faceNormal), packVertex(b, faceNormal), packVertex(c, faceNormal)}};
+}
+
+} // namespace ff::builder
