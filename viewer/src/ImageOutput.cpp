@@ -1,60 +1,65 @@
 #include "ImageOutput.h"
 
-#include <ff/storage/VertexCodec.h>
+#include "OiioPlugin.h"
 
-#include <OpenImageIO/imageio.h>
+#include <dlfcn.h>
 
-#include <algorithm>
+#include <memory>
 #include <string>
-#include <vector>
 
 namespace ff::viewer {
 
+namespace {
+
+struct Plugin {
+    FfOiioWriteImageFn write = nullptr;
+    FfOiioReadImageFn read = nullptr;
+    FfOiioFreeStatusFn freeStatus = nullptr;
+    Status status;
+};
+
+// Loaded once per process on first use; the handle is never closed (process lifetime).
+const Plugin& plugin() {
+    static const Plugin loaded = [] {
+        Plugin p;
+        // The executable's RUNPATH ($ORIGIN) finds the plugin beside it.
+        void* handle = dlopen("libff_oiio.so", RTLD_NOW | RTLD_LOCAL);
+        if (!handle) {
+            p.status = Status(ErrorCode::Unsupported, std::string("cannot load the image plugin: ") + dlerror());
+            return p;
+        }
+        const auto version = reinterpret_cast<FfOiioPluginVersionFn>(dlsym(handle, "ffOiioPluginVersion"));
+        p.write = reinterpret_cast<FfOiioWriteImageFn>(dlsym(handle, "ffOiioWriteImage"));
+        p.read = reinterpret_cast<FfOiioReadImageFn>(dlsym(handle, "ffOiioReadImage"));
+        p.freeStatus = reinterpret_cast<FfOiioFreeStatusFn>(dlsym(handle, "ffOiioFreeStatus"));
+        if (!version || !p.write || !p.read || !p.freeStatus || version() != kOiioPluginVersion)
+            p.status = Status(ErrorCode::Unsupported, "libff_oiio.so does not match this farfield");
+        return p;
+    }();
+    return loaded;
+}
+
+Status take(const Plugin& p, Status* raw) {
+    Status status = *raw;
+    p.freeStatus(raw);
+    return status;
+}
+
+} // namespace
+
 Status writeImage(const std::filesystem::path& path, const runtime::Image& image, bool withCoverage) {
-    auto out = OIIO::ImageOutput::create(path.string());
-    if (!out)
-        return Status(ErrorCode::InvalidArgument, "cannot write " + path.string() + ": " + OIIO::geterror());
-    std::string extension = path.extension().string();
-    std::transform(extension.begin(), extension.end(), extension.begin(), [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
-    const bool linearFloat = extension == ".exr" || extension == ".hdr";
-    const int channels = withCoverage ? 4 : 3;
-    OIIO::ImageSpec spec(image.width, image.height, channels, linearFloat ? OIIO::TypeDesc::HALF : OIIO::TypeDesc::UINT8);
-    spec.attribute("oiio:ColorSpace", linearFloat ? "Linear" : "sRGB");
-    if (!out->open(path.string(), spec))
-        return Status(ErrorCode::IoError, "cannot write " + path.string() + ": " + out->geterror());
-    // Strides let OIIO pick 3 of the 4 channels without a copy.
-    const OIIO::stride_t pixelStride = 4 * sizeof(float);
-    bool ok = false;
-    if (linearFloat) {
-        std::vector<float> pixels(image.rgba.size());
-        for (std::size_t i = 0; i < image.rgba.size(); ++i)
-            pixels[i] = (i % 4 == 3) ? image.rgba[i] / 255.0f : storage::srgb8ToLinear(image.rgba[i]);
-        ok = out->write_image(OIIO::TypeDesc::FLOAT, pixels.data(), pixelStride);
-    } else {
-        ok = out->write_image(OIIO::TypeDesc::UINT8, image.rgba.data(), 4);
-    }
-    if (!ok || !out->close())
-        return Status(ErrorCode::IoError, "cannot write " + path.string() + ": " + out->geterror());
-    return Status::ok();
+    const Plugin& p = plugin();
+    if (!p.status.isOk())
+        return p.status;
+    return take(p, p.write(path.c_str(), &image, withCoverage ? 1 : 0));
 }
 
 Result<runtime::Image> readImage(const std::filesystem::path& path) {
-    auto in = OIIO::ImageInput::open(path.string());
-    if (!in)
-        return Status(ErrorCode::NotFound, "cannot read " + path.string() + ": " + OIIO::geterror());
-    const OIIO::ImageSpec& spec = in->spec();
+    const Plugin& p = plugin();
+    if (!p.status.isOk())
+        return p.status;
     runtime::Image image;
-    image.width = spec.width;
-    image.height = spec.height;
-    image.rgba.assign(static_cast<std::size_t>(spec.width) * static_cast<std::size_t>(spec.height) * 4, 255);
-    std::vector<std::uint8_t> pixels(static_cast<std::size_t>(spec.width) * static_cast<std::size_t>(spec.height) *
-                                     static_cast<std::size_t>(spec.nchannels));
-    if (!in->read_image(0, 0, 0, spec.nchannels, OIIO::TypeDesc::UINT8, pixels.data()))
-        return Status(ErrorCode::Corrupt, "cannot read " + path.string() + ": " + in->geterror());
-    const auto channels = static_cast<std::size_t>(spec.nchannels);
-    for (std::size_t p = 0; p < pixels.size() / channels; ++p)
-        for (std::size_t c = 0; c < std::min<std::size_t>(channels, 4); ++c)
-            image.rgba[p * 4 + c] = pixels[p * channels + c];
+    FF_RETURN_IF_ERROR(take(p, p.read(path.c_str(), &image)));
     return image;
 }
 
