@@ -63,23 +63,29 @@ def table2(data, out):
 
 
 def forest(data, out):
-    fig, ax = plt.subplots(figsize=(6.5, 4.5))
-    tri = [float(r["triangles"]) for r in data]
-    measured = [r["full_measured"] == "1" for r in data]
-    full = [float(r["full_ms"]) for r in data]
-    hier = [float(r["hierarchical_ms"]) for r in data]
-    ax.plot([t for t, m in zip(tri, measured) if m], [f for f, m in zip(full, measured) if m], "s-", label="full, measured")
-    if not all(measured):
-        last = max(i for i, m in enumerate(measured) if m)
-        ax.plot(tri[last:], full[last:], "s--", color="C0", alpha=0.6, label="full, extrapolated (per-triangle cost)")
-    ax.plot(tri, hier, "o-", color="C1", label="hierarchical (epsilon = 1)")
+    fig, ax = plt.subplots(figsize=(7, 4.8))
+    for i, size in enumerate(sorted({(r["width"], r["height"]) for r in data}, key=lambda s: int(s[0]))):
+        sel = [r for r in data if (r["width"], r["height"]) == size]
+        label = f"{size[0]}x{size[1]}"
+        tri = [float(r["triangles"]) for r in sel]
+        measured = [r["full_measured"] == "1" for r in sel]
+        full = [float(r["full_ms"]) for r in sel]
+        hier = [float(r["hierarchical_ms"]) for r in sel]
+        color_full, color_hier = f"C{2 * i}", f"C{2 * i + 1}"
+        ax.plot([t for t, m in zip(tri, measured) if m], [f for f, m in zip(full, measured) if m], "s-",
+                color=color_full, label=f"full {label}, measured")
+        if not all(measured):
+            last = max(k for k, m in enumerate(measured) if m)
+            ax.plot(tri[last:], full[last:], "s--", color=color_full, alpha=0.6,
+                    label=f"full {label}, extrapolated from per-triangle cost")
+        ax.plot(tri, hier, "o-", color=color_hier, label=f"hierarchical {label} (epsilon = 1)")
     ax.set_xscale("log")
     ax.set_yscale("log")
     ax.set_xlabel("triangles in the scene (log)")
     ax.set_ylabel("frame time (ms, log)")
-    ax.set_title("forest of 1 .. %s trees" % data[-1]["trees"])
+    ax.set_title("forest of 1 .. %s trees, fixed view" % data[-1]["trees"])
     ax.grid(True, which="both", alpha=0.3)
-    ax.legend(fontsize=8)
+    ax.legend(fontsize=7)
     fig.tight_layout()
     fig.savefig(out / "forest.png", dpi=110)
 

@@ -306,7 +306,7 @@ void Renderer::Impl::drawCubes(const DrawList& list, const glm::mat4& viewProjec
     glEnable(GL_BLEND);
     glBlendFunc(GL_ONE, GL_ONE_MINUS_SRC_ALPHA); // premultiplied "over", back to front
     glDepthMask(GL_FALSE);
-    glDrawArraysInstanced(GL_TRIANGLES, 0, 36, static_cast<GLsizei>(list.cubes.size()));
+    glDrawArraysInstanced(GL_TRIANGLES, 0, 18, static_cast<GLsizei>(list.cubes.size()));
     glDepthMask(GL_TRUE);
     glDisable(GL_BLEND);
 }
