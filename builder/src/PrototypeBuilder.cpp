@@ -124,12 +124,13 @@ Result<PrototypeBuildResult> PrototypeBuilder::build(
     const float padded = edge * (1.0f + 1e-5f) + std::numeric_limits<float>::min();
     const Cell root{boundsMin, padded};
 
-    Result<PrototypeBuildResult> result = triangles.count() <= mChunkTriangles
+    const std::uint64_t triangleCount = triangles.count(); // building consumes the run file
+    Result<PrototypeBuildResult> result = triangleCount <= mChunkTriangles
             ? buildInMemory(triangles, root)
             : buildChunked(prototypeId, triangles, root, spillBytes);
     if (!result)
         return result.status().withContext("prototype " + std::to_string(prototypeId));
-    result->record.triangleCount = triangles.count();
+    result->record.triangleCount = triangleCount;
     result->summary.rootCellSize = padded;
     return result;
 }

@@ -184,6 +184,8 @@ Status SceneBuilder::addInstance(PrototypeId prototype, const glm::mat4& transfo
     return Status::ok();
 }
 
+void SceneBuilder::setMetadataJson(std::string json) { mImpl->options.metadataJson = std::move(json); }
+
 Result<BuildReport> SceneBuilder::finish() {
     Impl& s = *mImpl;
     if (s.finished)

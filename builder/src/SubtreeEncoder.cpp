@@ -64,10 +64,13 @@ EncodedSubtree encodeSubtree(
         }
     };
 
-    // Breadth-first fill of one page from the nodes in `local`; blocks that do not fit wait in
-    // `pending` and start pages of their own later.
-    std::deque<std::uint32_t> pending;
-    auto fillPage = [&](std::deque<std::uint32_t> local) {
+    // Pages fill breadth-first from sibling blocks, whole blocks only. A block that does not fit
+    // the current page waits in `pending`; when the page's own subtree is exhausted the next
+    // pending block continues in the same page if it fits, so small subtrees share pages
+    // instead of each opening one.
+    std::deque<std::uint32_t> pending; // nodes whose children block is not placed yet
+    auto fits = [&](std::uint32_t count) { return pages.back().size() + count <= perPage; };
+    auto fillFrom = [&](std::deque<std::uint32_t> local) {
         while (!local.empty()) {
             const std::uint32_t n = local.front();
             local.pop_front();
@@ -75,33 +78,29 @@ EncodedSubtree encodeSubtree(
             if (node.childCount == 0 || node.external)
                 continue;
             FF_ASSERT(node.childCount <= perPage);
-            if (pages.back().size() + node.childCount <= perPage) {
-                placeBlock(node.firstChild, node.childCount);
-                for (std::uint32_t c = 0; c < node.childCount; ++c)
-                    local.push_back(node.firstChild + c);
-            } else {
+            if (!fits(node.childCount)) {
                 pending.push_back(n);
+                continue;
             }
+            placeBlock(node.firstChild, node.childCount);
+            for (std::uint32_t c = 0; c < node.childCount; ++c)
+                local.push_back(node.firstChild + c);
         }
     };
 
     if (placeRoot) {
         pages.emplace_back();
         placeBlock(0, 1);
-        fillPage({0});
+        fillFrom({0});
     } else if (nodes[0].childCount > 0) {
         pending.push_back(0);
     }
     while (!pending.empty()) {
         const std::uint32_t parent = pending.front();
         pending.pop_front();
-        pages.emplace_back();
-        const BuildNode& node = nodes[parent];
-        placeBlock(node.firstChild, node.childCount);
-        std::deque<std::uint32_t> local;
-        for (std::uint32_t c = 0; c < node.childCount; ++c)
-            local.push_back(node.firstChild + c);
-        fillPage(std::move(local));
+        if (pages.empty() || !fits(nodes[parent].childCount))
+            pages.emplace_back();
+        fillFrom({parent});
     }
 
     EncodedSubtree out;

@@ -46,10 +46,40 @@ Status Selection::select(const Camera& camera, const SelectionOptions& options, 
     mFrusta.clear();
     mChildStack.clear();
     pushTransform(glm::mat4(1.0f));
-    if (options.method == Method::Full)
-        return selectFull();
-    FF_ASSIGN_OR_RETURN(const storage::NodeRecord root, mScene.node(mScene.header().root));
-    return visit(root, 0);
+    if (options.method == Method::Full) {
+        FF_RETURN_IF_ERROR(selectFull());
+    } else {
+        FF_ASSIGN_OR_RETURN(const storage::NodeRecord root, mScene.node(mScene.header().root));
+        FF_RETURN_IF_ERROR(visit(root, 0));
+    }
+    mergeGeometryDraws();
+    return Status::ok();
+}
+
+// Opaque geometry is depth-tested, so its order is free: sorted by transform and page, runs that
+// continue one another become one draw (far fewer draw commands), and both methods submit the
+// same triangles in the same order, so ε = 0 reproduces --method full pixel for pixel.
+void Selection::mergeGeometryDraws() {
+    auto& draws = mOut->geometry;
+    std::sort(draws.begin(), draws.end(), [](const GeometryDraw& a, const GeometryDraw& b) {
+        if (a.transform != b.transform)
+            return a.transform < b.transform;
+        return a.page != b.page ? a.page < b.page : a.firstTriangle < b.firstTriangle;
+    });
+    std::size_t out = 0;
+    for (std::size_t i = 0; i < draws.size(); ++i) {
+        if (out > 0) {
+            GeometryDraw& last = draws[out - 1];
+            if (last.transform == draws[i].transform && last.page == draws[i].page &&
+                last.firstTriangle + last.triangleCount == draws[i].firstTriangle) {
+                last.triangleCount += draws[i].triangleCount;
+                continue;
+            }
+        }
+        draws[out++] = draws[i];
+    }
+    draws.resize(out);
+    mStats->geometryDraws = out;
 }
 
 Status Selection::visit(const storage::NodeRecord& node, std::uint32_t transform) {
@@ -115,7 +145,6 @@ Status Selection::emitGeometry(const storage::NodeRecord& node, std::uint32_t tr
     for (const storage::GeometrySegment& s : mSegments) {
         mOut->geometry.push_back({s.page, s.firstSlot, s.count, transform});
         mStats->trianglesDrawn += s.count;
-        ++mStats->geometryDraws;
     }
     return Status::ok();
 }
@@ -183,7 +212,6 @@ Status Selection::selectFull() {
         for (const storage::GeometrySegment& s : mPrototypeGeometry[instance.prototype]) {
             mOut->geometry.push_back({s.page, s.firstSlot, s.count, transform});
             mStats->trianglesDrawn += s.count;
-            ++mStats->geometryDraws;
         }
     }
     return Status::ok();

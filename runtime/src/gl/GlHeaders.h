@@ -1,9 +1,7 @@
 #pragma once
 
-// GL entry points come straight from the OSMesa library (DESIGN.md: define GL_GLEXT_PROTOTYPES
-// before the first GL include).
-#ifndef GL_GLEXT_PROTOTYPES
-#define GL_GLEXT_PROTOTYPES 1
-#endif
-#include <GL/gl.h>
-#include <GL/glext.h>
+// GL entry points come through glad (generated at build time from Debian's python3-glad and
+// its bundled Khronos registry), loaded from whatever context is current: OSMesa's
+// OSMesaGetProcAddress headless, glfwGetProcAddress in a window. Nothing links libGL or
+// libOSMesa directly, so a process that never renders (`farfield build`) never loads them.
+#include <glad/gl.h>

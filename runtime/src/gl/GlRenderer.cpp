@@ -64,12 +64,24 @@ Result<GLuint> linkProgram(const char* vertexSource, const char* fragmentSource)
     return program;
 }
 
+// Bind-to-edit rather than direct state access: OSMesa exports the GL 4.3 entry points but
+// not the 4.5 DSA ones, and farfield links GL functions directly (no loader).
+void bufferData(GLuint buffer, GLsizeiptr bytes, const void* data, GLenum usage) {
+    glBindBuffer(GL_COPY_WRITE_BUFFER, buffer);
+    glBufferData(GL_COPY_WRITE_BUFFER, bytes, data, usage);
+}
+
+void bufferSubData(GLuint buffer, GLintptr offset, GLsizeiptr bytes, const void* data) {
+    glBindBuffer(GL_COPY_WRITE_BUFFER, buffer);
+    glBufferSubData(GL_COPY_WRITE_BUFFER, offset, bytes, data);
+}
+
 // Grows a buffer to at least `bytes` (contents are rewritten every frame, so none are kept).
 void ensureCapacity(GLuint buffer, GLsizeiptr& capacity, GLsizeiptr bytes) {
     if (bytes <= capacity)
         return;
     capacity = std::max<GLsizeiptr>(bytes, capacity * 2);
-    glNamedBufferData(buffer, capacity, nullptr, GL_DYNAMIC_DRAW);
+    bufferData(buffer, capacity, nullptr, GL_DYNAMIC_DRAW);
 }
 
 } // namespace
@@ -145,7 +157,7 @@ Result<std::unique_ptr<Renderer>> Renderer::create(const storage::SceneFile& sce
         impl->freeSlots.push_back(s);
 
     GLuint buffers[7];
-    glCreateBuffers(7, buffers);
+    glGenBuffers(7, buffers);
     impl->arena = buffers[0];
     impl->transforms = buffers[1];
     impl->normalMatrices = buffers[2];
@@ -153,40 +165,40 @@ Result<std::unique_ptr<Renderer>> Renderer::create(const storage::SceneFile& sce
     impl->iota = buffers[4];
     impl->indirect = buffers[5];
     impl->cubes = buffers[6];
-    glNamedBufferData(impl->arena, impl->slotBytes * impl->slotCount, nullptr, GL_DYNAMIC_DRAW);
+    bufferData(impl->arena, impl->slotBytes * impl->slotCount, nullptr, GL_DYNAMIC_DRAW);
 
     // Geometry: PackedVertex layout (20 bytes) straight from the pages.
-    glCreateVertexArrays(1, &impl->geometryVao);
-    const GLuint g = impl->geometryVao;
-    glVertexArrayVertexBuffer(g, 0, impl->arena, 0, sizeof(storage::PackedVertex));
-    glVertexArrayAttribFormat(g, 0, 3, GL_FLOAT, GL_FALSE, offsetof(storage::PackedVertex, position));
-    glVertexArrayAttribFormat(g, 1, 2, GL_SHORT, GL_TRUE, offsetof(storage::PackedVertex, normalOct));
-    glVertexArrayAttribFormat(g, 2, 4, GL_UNSIGNED_BYTE, GL_TRUE, offsetof(storage::PackedVertex, color));
+    glGenVertexArrays(1, &impl->geometryVao);
+    glBindVertexArray(impl->geometryVao);
+    glBindVertexBuffer(0, impl->arena, 0, sizeof(storage::PackedVertex));
+    glVertexAttribFormat(0, 3, GL_FLOAT, GL_FALSE, offsetof(storage::PackedVertex, position));
+    glVertexAttribFormat(1, 2, GL_SHORT, GL_TRUE, offsetof(storage::PackedVertex, normalOct));
+    glVertexAttribFormat(2, 4, GL_UNSIGNED_BYTE, GL_TRUE, offsetof(storage::PackedVertex, color));
     for (GLuint a = 0; a < 3; ++a) {
-        glVertexArrayAttribBinding(g, a, 0);
-        glEnableVertexArrayAttrib(g, a);
+        glVertexAttribBinding(a, 0);
+        glEnableVertexAttribArray(a);
     }
     // The transform index: an instanced attribute over 0, 1, 2, ... offset by baseInstance.
-    glVertexArrayAttribIFormat(g, 3, 1, GL_UNSIGNED_INT, 0);
-    glVertexArrayAttribBinding(g, 3, 1);
-    glVertexArrayBindingDivisor(g, 1, 1);
-    glEnableVertexArrayAttrib(g, 3);
+    glVertexAttribIFormat(3, 1, GL_UNSIGNED_INT, 0);
+    glVertexAttribBinding(3, 1);
+    glVertexBindingDivisor(1, 1);
+    glEnableVertexAttribArray(3);
 
     // Cubes: one CubeDraw per instance.
-    glCreateVertexArrays(1, &impl->cubeVao);
-    const GLuint c = impl->cubeVao;
-    glVertexArrayVertexBuffer(c, 0, impl->cubes, 0, sizeof(CubeDraw));
-    glVertexArrayBindingDivisor(c, 0, 1);
-    glVertexArrayAttribFormat(c, 0, 3, GL_FLOAT, GL_FALSE, offsetof(CubeDraw, boxMin));
-    glVertexArrayAttribFormat(c, 1, 3, GL_FLOAT, GL_FALSE, offsetof(CubeDraw, boxMax));
-    glVertexArrayAttribIFormat(c, 2, 1, GL_UNSIGNED_INT, offsetof(CubeDraw, transform));
+    glGenVertexArrays(1, &impl->cubeVao);
+    glBindVertexArray(impl->cubeVao);
+    glBindVertexBuffer(0, impl->cubes, 0, sizeof(CubeDraw));
+    glVertexBindingDivisor(0, 1);
+    glVertexAttribFormat(0, 3, GL_FLOAT, GL_FALSE, offsetof(CubeDraw, boxMin));
+    glVertexAttribFormat(1, 3, GL_FLOAT, GL_FALSE, offsetof(CubeDraw, boxMax));
+    glVertexAttribIFormat(2, 1, GL_UNSIGNED_INT, offsetof(CubeDraw, transform));
     for (GLuint f = 0; f < 6; ++f)
-        glVertexArrayAttribFormat(c, 3 + f, 4, GL_UNSIGNED_BYTE, GL_TRUE,
-                                  static_cast<GLuint>(offsetof(CubeDraw, faces) + 4 * f));
+        glVertexAttribFormat(3 + f, 4, GL_UNSIGNED_BYTE, GL_TRUE, static_cast<GLuint>(offsetof(CubeDraw, faces) + 4 * f));
     for (GLuint a = 0; a < 9; ++a) {
-        glVertexArrayAttribBinding(c, a, 0);
-        glEnableVertexArrayAttrib(c, a);
+        glVertexAttribBinding(a, 0);
+        glEnableVertexAttribArray(a);
     }
+    glBindVertexArray(0);
     if (const GLenum error = glGetError(); error != GL_NO_ERROR)
         return Status(ErrorCode::Internal, "OpenGL error " + std::to_string(error) + " while creating the renderer");
     return std::unique_ptr<Renderer>(new Renderer(std::move(impl)));
@@ -203,14 +215,19 @@ Status Renderer::Impl::ensureTarget(int width, int height) {
     glDeleteFramebuffers(1, &framebuffer);
     glDeleteTextures(1, &colorTexture);
     glDeleteRenderbuffers(1, &depthBuffer);
-    glCreateTextures(GL_TEXTURE_2D, 1, &colorTexture);
-    glTextureStorage2D(colorTexture, 1, GL_SRGB8_ALPHA8, width, height);
-    glCreateRenderbuffers(1, &depthBuffer);
-    glNamedRenderbufferStorage(depthBuffer, GL_DEPTH_COMPONENT24, width, height);
-    glCreateFramebuffers(1, &framebuffer);
-    glNamedFramebufferTexture(framebuffer, GL_COLOR_ATTACHMENT0, colorTexture, 0);
-    glNamedFramebufferRenderbuffer(framebuffer, GL_DEPTH_ATTACHMENT, GL_RENDERBUFFER, depthBuffer);
-    if (glCheckNamedFramebufferStatus(framebuffer, GL_FRAMEBUFFER) != GL_FRAMEBUFFER_COMPLETE)
+    glGenTextures(1, &colorTexture);
+    glBindTexture(GL_TEXTURE_2D, colorTexture);
+    glTexStorage2D(GL_TEXTURE_2D, 1, GL_SRGB8_ALPHA8, width, height);
+    glGenRenderbuffers(1, &depthBuffer);
+    glBindRenderbuffer(GL_RENDERBUFFER, depthBuffer);
+    glRenderbufferStorage(GL_RENDERBUFFER, GL_DEPTH_COMPONENT24, width, height);
+    glGenFramebuffers(1, &framebuffer);
+    glBindFramebuffer(GL_FRAMEBUFFER, framebuffer);
+    glFramebufferTexture2D(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_TEXTURE_2D, colorTexture, 0);
+    glFramebufferRenderbuffer(GL_FRAMEBUFFER, GL_DEPTH_ATTACHMENT, GL_RENDERBUFFER, depthBuffer);
+    const GLenum complete = glCheckFramebufferStatus(GL_FRAMEBUFFER);
+    glBindFramebuffer(GL_FRAMEBUFFER, 0);
+    if (complete != GL_FRAMEBUFFER_COMPLETE)
         return Status(ErrorCode::Internal, "render target framebuffer is incomplete");
     targetWidth = width;
     targetHeight = height;
@@ -233,7 +250,7 @@ Result<std::uint32_t> Renderer::Impl::residentSlot(std::uint64_t page, FrameStat
     FF_ASSIGN_OR_RETURN(const std::span<const std::byte> payload, scene->pagePayload(page, storage::PageType::Geometry));
     const std::uint32_t slot = freeSlots.back();
     freeSlots.pop_back();
-    glNamedBufferSubData(arena, static_cast<GLintptr>(slot) * slotBytes, slotBytes, payload.data());
+    bufferSubData(arena, static_cast<GLintptr>(slot) * slotBytes, slotBytes, payload.data());
     slotOfPage[page] = slot;
     pageOfSlot[slot] = page;
     ++stats.pagesUploaded;
@@ -245,7 +262,7 @@ void Renderer::Impl::drawBatch(const glm::mat4& viewProjection) {
         return;
     const auto bytes = static_cast<GLsizeiptr>(commands.size() * sizeof(IndirectCommand));
     ensureCapacity(indirect, indirectCap, bytes);
-    glNamedBufferSubData(indirect, 0, bytes, commands.data());
+    bufferSubData(indirect, 0, bytes, commands.data());
     glUseProgram(geometryProgram);
     glUniformMatrix4fv(glGetUniformLocation(geometryProgram, "uViewProjection"), 1, GL_FALSE, glm::value_ptr(viewProjection));
     glUniform3f(glGetUniformLocation(geometryProgram, "uLightDirection"), storage::kLightDirection[0],
@@ -282,7 +299,7 @@ void Renderer::Impl::drawCubes(const DrawList& list, const glm::mat4& viewProjec
         return;
     const auto bytes = static_cast<GLsizeiptr>(list.cubes.size() * sizeof(CubeDraw));
     ensureCapacity(cubes, cubesCap, bytes);
-    glNamedBufferSubData(cubes, 0, bytes, list.cubes.data());
+    bufferSubData(cubes, 0, bytes, list.cubes.data());
     glUseProgram(cubeProgram);
     glUniformMatrix4fv(glGetUniformLocation(cubeProgram, "uViewProjection"), 1, GL_FALSE, glm::value_ptr(viewProjection));
     glBindVertexArray(cubeVao);
@@ -315,16 +332,18 @@ Result<Image> Renderer::render(
     ensureCapacity(s.transforms, s.transformsCap, transformCount * static_cast<GLsizeiptr>(sizeof(glm::mat4)));
     ensureCapacity(s.normalMatrices, s.normalsCap, transformCount * static_cast<GLsizeiptr>(sizeof(glm::mat4)));
     ensureCapacity(s.localEyes, s.eyesCap, transformCount * static_cast<GLsizeiptr>(sizeof(glm::vec4)));
-    glNamedBufferSubData(s.transforms, 0, transformCount * static_cast<GLsizeiptr>(sizeof(glm::mat4)), list.transforms.data());
-    glNamedBufferSubData(s.normalMatrices, 0, transformCount * static_cast<GLsizeiptr>(sizeof(glm::mat4)), s.normalScratch.data());
-    glNamedBufferSubData(s.localEyes, 0, transformCount * static_cast<GLsizeiptr>(sizeof(glm::vec4)), s.eyeScratch.data());
+    bufferSubData(s.transforms, 0, transformCount * static_cast<GLsizeiptr>(sizeof(glm::mat4)), list.transforms.data());
+    bufferSubData(s.normalMatrices, 0, transformCount * static_cast<GLsizeiptr>(sizeof(glm::mat4)), s.normalScratch.data());
+    bufferSubData(s.localEyes, 0, transformCount * static_cast<GLsizeiptr>(sizeof(glm::vec4)), s.eyeScratch.data());
     if (s.iotaCap < transformCount * static_cast<GLsizeiptr>(sizeof(GLuint))) {
         std::vector<GLuint> values(static_cast<std::size_t>(std::max<GLsizeiptr>(transformCount * 2, 1024)));
         for (std::size_t i = 0; i < values.size(); ++i)
             values[i] = static_cast<GLuint>(i);
         s.iotaCap = static_cast<GLsizeiptr>(values.size() * sizeof(GLuint));
-        glNamedBufferData(s.iota, s.iotaCap, values.data(), GL_STATIC_DRAW);
-        glVertexArrayVertexBuffer(s.geometryVao, 1, s.iota, 0, sizeof(GLuint));
+        bufferData(s.iota, s.iotaCap, values.data(), GL_STATIC_DRAW);
+        glBindVertexArray(s.geometryVao);
+        glBindVertexBuffer(1, s.iota, 0, sizeof(GLuint));
+        glBindVertexArray(0);
     }
     glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 0, s.transforms);
     glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 1, s.normalMatrices);

@@ -110,6 +110,9 @@ public:
             PrototypeId prototype, std::span<const storage::PackedTriangle> triangles) override;
     [[nodiscard]] Status addInstance(PrototypeId prototype, const glm::mat4& transform) override;
 
+    /** Replaces BuildOptions::metadataJson (sources learn their cameras only while feeding). */
+    void setMetadataJson(std::string json);
+
     /** Runs partition, hierarchy and write; the file exists under its final name only if this
      *  succeeds. Temporary files are removed either way. */
     [[nodiscard]] Result<BuildReport> finish();

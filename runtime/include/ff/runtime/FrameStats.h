@@ -16,7 +16,7 @@ struct FrameStats {
     /** Front-facing cube faces drawn per level of their own hierarchy (index = level). */
     std::vector<std::uint64_t> cubeFacesPerLevel;
     std::uint64_t trianglesDrawn = 0;
-    std::uint64_t geometryDraws = 0; ///< page runs drawn
+    std::uint64_t geometryDraws = 0; ///< draw commands for geometry (merged page runs)
     std::uint64_t pagesUploaded = 0; ///< geometry pages sent to the GPU this frame
     double selectMs = 0.0;
     double drawMs = 0.0;  ///< submission + GPU until finished (glFinish)

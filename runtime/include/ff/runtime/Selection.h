@@ -54,6 +54,7 @@ private:
     void emitCube(const storage::NodeRecord& node, std::uint32_t transform);
     std::uint32_t pushTransform(const glm::mat4& transform);
     Status selectFull();
+    void mergeGeometryDraws();
     Status collectPrototypeGeometry(std::uint32_t prototype);
 
     const storage::SceneFile& mScene;

@@ -1,0 +1,44 @@
+#pragma once
+
+#include <ff/runtime/Camera.h>
+#include <ff/runtime/FrameStats.h>
+#include <ff/runtime/Image.h>
+#include <ff/runtime/Renderer.h>
+#include <ff/runtime/Selection.h>
+#include <ff/storage/SceneFile.h>
+#include <ff/storage/Status.h>
+
+#include <memory>
+
+namespace ff::runtime {
+
+/** A rendered frame with its statistics. */
+struct Frame {
+    Image image;
+    FrameStats stats;
+};
+
+/**
+ * One scene, one view at a time: selection (CPU) then drawing (GL) into an image, timed.
+ * Owns the Selection and Renderer for a scene; needs a current GL 4.5 context. Main thread only.
+ */
+class FrameRenderer {
+public:
+    [[nodiscard]] static Result<std::unique_ptr<FrameRenderer>> create(
+            const storage::SceneFile& scene, const RendererOptions& options = {});
+
+    /** Renders width x height, supersampled `supersample` x `supersample` (1 = none). */
+    [[nodiscard]] Result<Frame> render(
+            const Camera& camera, SelectionOptions selection, int width, int height, int supersample = 1);
+
+    const DrawList& lastDrawList() const noexcept { return mDrawList; }
+
+private:
+    FrameRenderer(const storage::SceneFile& scene, std::unique_ptr<Renderer> renderer);
+
+    Selection mSelection;
+    std::unique_ptr<Renderer> mRenderer;
+    DrawList mDrawList;
+};
+
+} // namespace ff::runtime

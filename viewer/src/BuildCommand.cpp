@@ -1,0 +1,143 @@
+#include "Commands.h"
+#include "ProgressBar.h"
+#include "SceneInput.h"
+#include "Units.h"
+
+#include <ff/builder/Generators.h>
+#include <ff/builder/SceneBuilder.h>
+
+#include <nlohmann/json.hpp>
+
+#include <cstdio>
+#include <fstream>
+#include <memory>
+#include <string>
+
+namespace ff::viewer {
+
+namespace {
+
+struct BuildArgs {
+    std::string input;
+    std::string generate;
+    std::string output;
+    std::string memoryBudget = "1GiB";
+    std::string pageSize = "64KiB";
+    unsigned threads = 0;
+    int bakeResolution = 8;
+    std::string bakeInner = "composite";
+    float cubeCost = 6.0f;
+    float largeTriangleTolerance = 1.0f;
+    int maxDepth = 20;
+    std::string report;
+    std::string tempDirectory;
+    bool quiet = false;
+};
+
+std::string generatorHelp() {
+    std::string text = "\nGenerators (--generate NAME:key=value,...):\n";
+    for (const builder::GeneratorInfo& g : builder::generatorCatalog()) {
+        text += "  " + g.name + "  " + g.summary + "\n";
+        for (const auto& [key, meaning] : g.params)
+            text += "      " + key + "  " + meaning + "\n";
+    }
+    return text;
+}
+
+int runBuild(const BuildArgs& args) {
+    if (args.input.empty() == args.generate.empty())
+        return reportError("build", Status(ErrorCode::InvalidArgument, "give either an input glTF file or --generate"));
+    builder::BuildOptions options;
+    auto budget = parseByteSize(args.memoryBudget);
+    if (!budget)
+        return reportError("build", budget.status().withContext("--memory-budget"));
+    auto pageSize = parseByteSize(args.pageSize);
+    if (!pageSize)
+        return reportError("build", pageSize.status().withContext("--page-size"));
+    if (args.bakeInner != "composite" && args.bakeInner != "direct")
+        return reportError("build", Status(ErrorCode::InvalidArgument, "--bake-inner must be composite or direct"));
+    options.memoryBudgetBytes = *budget;
+    options.pageSize = static_cast<std::uint32_t>(std::min<std::uint64_t>(*pageSize, 0xFFFFFFFFu));
+    options.threads = args.threads;
+    options.tempDirectory = args.tempDirectory;
+    options.hierarchy.bakeResolution = args.bakeResolution;
+    options.hierarchy.bakeInnerDirect = args.bakeInner == "direct";
+    options.hierarchy.cubeCost = args.cubeCost;
+    options.hierarchy.largeTriangleTolerance = args.largeTriangleTolerance;
+    options.hierarchy.maxDepth = args.maxDepth;
+    ProgressBar progress;
+    if (!args.quiet)
+        options.progress = [&progress](const builder::BuildProgress& p) { progress.update(p.phase, p.done, p.total); };
+
+    auto sceneBuilder = builder::SceneBuilder::create(args.output, options);
+    if (!sceneBuilder)
+        return reportError("build", sceneBuilder.status());
+    if (!args.quiet)
+        progress.update("scan", 0, 0);
+    auto input = feedScene(args.input, args.generate, **sceneBuilder);
+    if (!input)
+        return reportError("build", input.status());
+    // The metadata section carries the source and its cameras.
+    auto report = [&]() {
+        (*sceneBuilder)->setMetadataJson(input->metadataJson);
+        return (*sceneBuilder)->finish();
+    }();
+    progress.finish();
+    if (!report)
+        return reportError("build", report.status());
+
+    nlohmann::json json = nlohmann::json::parse(builder::buildReportJson(*report));
+    json["source"] = input->source;
+    json["output"] = args.output;
+    json["declared_triangles"] = input->declaredTriangles;
+    json["warnings"] = input->warnings;
+    if (!args.report.empty()) {
+        std::ofstream out(args.report);
+        out << json.dump(2) << "\n";
+        if (!out)
+            return reportError("build", Status(ErrorCode::IoError, "cannot write report " + args.report));
+    }
+    if (!args.quiet) {
+        for (const std::string& w : input->warnings)
+            std::fprintf(stderr, "warning: %s\n", w.c_str());
+        std::fprintf(stderr,
+                     "built %s: %llu triangles drawn (%llu stored), %u prototypes, %llu instances, %llu nodes, "
+                     "%s, %.2f s, peak RSS %s\n",
+                     args.output.c_str(), static_cast<unsigned long long>(report->instancedTriangles),
+                     static_cast<unsigned long long>(report->storedTriangles), report->prototypes,
+                     static_cast<unsigned long long>(report->instances), static_cast<unsigned long long>(report->nodes),
+                     formatBytes(report->fileBytes).c_str(), json["total_seconds"].get<double>(),
+                     formatBytes(report->peakRssBytes).c_str());
+        if (report->droppedNonFinite + report->droppedDegenerate > 0)
+            std::fprintf(stderr, "dropped %llu triangles with non-finite positions and %llu with zero area\n",
+                         static_cast<unsigned long long>(report->droppedNonFinite),
+                         static_cast<unsigned long long>(report->droppedDegenerate));
+    }
+    return 0;
+}
+
+} // namespace
+
+CommandRunner addBuildCommand(CLI::App& app) {
+    auto args = std::make_shared<BuildArgs>();
+    CLI::App* cmd = app.add_subcommand("build", "Build a scene file (.ffs) from glTF or a generator, out of core");
+    cmd->footer(generatorHelp());
+    cmd->add_option("input", args->input, "Input glTF 2.0 file (.gltf or .glb)");
+    cmd->add_option("--generate", args->generate, "Procedural scene instead of a file, e.g. forest:trees=16384");
+    cmd->add_option("-o,--output", args->output, "Output scene file")->required();
+    cmd->add_option("--memory-budget", args->memoryBudget, "Peak memory for building (e.g. 512MiB, 2GiB)")->capture_default_str();
+    cmd->add_option("--page-size", args->pageSize, "Page size, a power of two from 4KiB to 16MiB")->capture_default_str();
+    cmd->add_option("--threads", args->threads, "Worker threads (0 = all cores)")->capture_default_str();
+    cmd->add_option("--bake-resolution", args->bakeResolution, "Samples per cube face edge")->capture_default_str();
+    cmd->add_option("--bake-inner", args->bakeInner, "Inner-node cubes: composite (Fig. 3) or direct from geometry")->capture_default_str();
+    cmd->add_option("--cube-cost", args->cubeCost, "Triangles one drawn color cube costs (subdivision rule)")->capture_default_str();
+    cmd->add_option("--large-triangle-tolerance", args->largeTriangleTolerance,
+                    "Triangles larger than this x their cell stay at the inner node")->capture_default_str();
+    cmd->add_option("--max-depth", args->maxDepth, "Deepest octree level")->capture_default_str();
+    cmd->add_option("--report", args->report, "Write the JSON build report here");
+    cmd->add_option("--temp-dir", args->tempDirectory, "Directory for spill files (default: beside the output)");
+    cmd->add_flag("-q,--quiet", args->quiet, "No progress or summary on stderr");
+    return [args]() { return runBuild(*args); };
+}
+
+} // namespace ff::viewer

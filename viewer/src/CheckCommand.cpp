@@ -1,0 +1,56 @@
+#include "Commands.h"
+#include "ProgressBar.h"
+
+#include <ff/storage/SceneFile.h>
+
+#include <nlohmann/json.hpp>
+
+#include <cstdio>
+#include <memory>
+#include <string>
+
+namespace ff::viewer {
+
+namespace {
+
+struct CheckArgs {
+    std::string scene;
+    bool json = false;
+};
+
+int runCheck(const CheckArgs& args) {
+    ProgressBar progress;
+    auto scene = storage::SceneFile::open(args.scene);
+    Status status = scene ? Status::ok() : scene.status();
+    if (scene)
+        status = (*scene)->verifyAll([&progress](std::uint64_t done, std::uint64_t total) { progress.update("check", done, total); });
+    progress.finish();
+    if (args.json) {
+        nlohmann::json out = {{"scene", args.scene}, {"ok", status.isOk()}};
+        if (scene)
+            out["pages"] = (*scene)->pageCount();
+        if (!status.isOk()) {
+            out["error"] = status.message();
+            out["code"] = errorCodeName(status.code());
+        }
+        std::printf("%s\n", out.dump().c_str());
+    }
+    if (!status.isOk())
+        return reportError("check", status.withContext(args.scene));
+    if (!args.json)
+        std::printf("%s: ok, %llu pages of %u bytes verified\n", args.scene.c_str(),
+                    static_cast<unsigned long long>((*scene)->pageCount()), (*scene)->pageSize());
+    return 0;
+}
+
+} // namespace
+
+CommandRunner addCheckCommand(CLI::App& app) {
+    auto args = std::make_shared<CheckArgs>();
+    CLI::App* cmd = app.add_subcommand("check", "Verify every page of a scene file (checksums, structure); names the first bad page");
+    cmd->add_option("scene", args->scene, "Scene file (.ffs)")->required();
+    cmd->add_flag("--json", args->json, "Print the result as JSON");
+    return [args]() { return runCheck(*args); };
+}
+
+} // namespace ff::viewer

@@ -1,0 +1,123 @@
+#include "CameraOptions.h"
+#include "Commands.h"
+#include "ImageOutput.h"
+#include "Units.h"
+
+#include <ff/runtime/FrameRenderer.h>
+#include <ff/runtime/OffscreenContext.h>
+#include <ff/storage/SceneFile.h>
+
+#include <nlohmann/json.hpp>
+
+#include <cstdio>
+#include <fstream>
+#include <memory>
+#include <string>
+
+namespace ff::viewer {
+
+namespace {
+
+struct RenderArgs {
+    std::string scene;
+    std::string output;
+    std::string size = "640x480";
+    float epsilon = 1.0f;
+    std::string method = "hierarchical";
+    int supersample = 1;
+    int frames = 1;
+    std::string stats;
+    std::string background = "0.70,0.75,0.83";
+    std::string gpuBudget = "512MiB";
+    bool coverage = false;
+    CameraOptions camera;
+};
+
+int runRender(const RenderArgs& args) {
+    auto size = parseImageSize(args.size);
+    if (!size)
+        return reportError("render", size.status().withContext("--size"));
+    if (args.method != "hierarchical" && args.method != "full")
+        return reportError("render", Status(ErrorCode::InvalidArgument, "--method must be hierarchical or full"));
+    if (!(args.epsilon >= 0.0f))
+        return reportError("render", Status(ErrorCode::InvalidArgument, "--epsilon must be >= 0"));
+    if (args.supersample < 1 || args.supersample > 16 || args.frames < 1)
+        return reportError("render", Status(ErrorCode::InvalidArgument, "--supersample must be 1..16 and --frames >= 1"));
+    auto background = parseVec3(args.background);
+    if (!background)
+        return reportError("render", background.status().withContext("--background"));
+    auto gpuBudget = parseByteSize(args.gpuBudget);
+    if (!gpuBudget)
+        return reportError("render", gpuBudget.status().withContext("--gpu-budget"));
+
+    auto scene = storage::SceneFile::open(args.scene);
+    if (!scene)
+        return reportError("render", scene.status().withContext(args.scene));
+    auto camera = args.camera.resolve(**scene);
+    if (!camera)
+        return reportError("render", camera.status());
+    auto context = runtime::OffscreenContext::create();
+    if (!context)
+        return reportError("render", context.status());
+    runtime::RendererOptions rendererOptions;
+    rendererOptions.gpuBudgetBytes = *gpuBudget;
+    rendererOptions.backgroundLinear = *background;
+    auto renderer = runtime::FrameRenderer::create(**scene, rendererOptions);
+    if (!renderer)
+        return reportError("render", renderer.status());
+
+    runtime::SelectionOptions selection;
+    selection.method = args.method == "full" ? runtime::Method::Full : runtime::Method::Hierarchical;
+    selection.epsilonPixels = args.epsilon;
+    nlohmann::json frames = nlohmann::json::array();
+    Result<runtime::Frame> frame = Status(ErrorCode::Internal, "no frame rendered");
+    for (int f = 0; f < args.frames; ++f) {
+        frame = (*renderer)->render(*camera, selection, size->x, size->y, args.supersample);
+        if (!frame)
+            return reportError("render", frame.status().withContext(args.scene));
+        nlohmann::json stats = nlohmann::json::parse(frame->stats.toJson());
+        stats["frame"] = f;
+        std::printf("%s\n", stats.dump().c_str());
+        frames.push_back(stats);
+    }
+    if (!args.output.empty()) {
+        if (const Status written = writeImage(args.output, frame->image, args.coverage); !written)
+            return reportError("render", written);
+    }
+    if (!args.stats.empty()) {
+        const nlohmann::json out = {{"scene", args.scene},
+                                    {"method", args.method},
+                                    {"epsilon", args.epsilon},
+                                    {"width", size->x},
+                                    {"height", size->y},
+                                    {"supersample", args.supersample},
+                                    {"frames", frames}};
+        std::ofstream file(args.stats);
+        file << out.dump(2) << "\n";
+        if (!file)
+            return reportError("render", Status(ErrorCode::IoError, "cannot write " + args.stats));
+    }
+    return 0;
+}
+
+} // namespace
+
+CommandRunner addRenderCommand(CLI::App& app) {
+    auto args = std::make_shared<RenderArgs>();
+    CLI::App* cmd = app.add_subcommand("render", "Render a scene file headless (OSMesa) to an image");
+    cmd->add_option("scene", args->scene, "Scene file (.ffs)")->required();
+    cmd->add_option("-o,--output", args->output, "Image to write (.png, .exr, .tif, ...)");
+    cmd->add_option("--size", args->size, "Image size WIDTHxHEIGHT")->capture_default_str();
+    cmd->add_option("--epsilon", args->epsilon, "Cells smaller than this many pixels are drawn as color cubes (0: all geometry)")->capture_default_str();
+    cmd->add_option("--method", args->method, "hierarchical or full (every triangle, no hierarchy)")->capture_default_str();
+    cmd->add_option("--supersample", args->supersample, "Render NxN samples per pixel (a reference)")->capture_default_str();
+    cmd->add_option("--frames", args->frames, "Render the view this many times (timing; first frame uploads)")->capture_default_str();
+    cmd->add_option("--stats", args->stats, "Write the per-frame statistics as JSON here (also printed on stdout)");
+    cmd->add_option("--background", args->background, "Background colour, linear r,g,b")->capture_default_str();
+    cmd->add_option("--gpu-budget", args->gpuBudget, "GPU memory for geometry pages")->capture_default_str();
+    cmd->add_flag("--coverage-alpha", args->coverage, "Keep coverage as the image's alpha channel");
+    args->camera.addTo(*cmd);
+    return [args]() { return runRender(*args); };
+}
+
+} // namespace ff::viewer

@@ -1,0 +1,3 @@
+#include <ff/viewer/Cli.h>
+
+int main(int argc, char** argv) { return ff::viewer::runCli(argc, argv); }
