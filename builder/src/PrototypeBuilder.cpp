@@ -38,13 +38,14 @@ struct TopNode {
 constexpr int kMaxCountLevel = 16;
 
 std::uint64_t spreadBits(std::uint64_t v) {
-    // Interleave 16 bits with two zero bits between each.
+    // Interleave 16 bits with two zero bits between each: the classic 21-bit magic numbers
+    // (bit i lands at bit 3i). Each mask keeps only the copies that belong where they landed.
     v &= 0xFFFF;
-    v = (v | (v << 32)) & 0x0000FFFF0000FFFFull; // not all steps are needed for 16 bits, but
-    v = (v | (v << 16)) & 0x00FF0000FF0000FFull; // these keep the classic masks recognisable
-    v = (v | (v << 8)) & 0xF00F00F00F00F00Full;
-    v = (v | (v << 4)) & 0x30C30C30C30C30C3ull;
-    v = (v | (v << 2)) & 0x9249249249249249ull;
+    v = (v | (v << 32)) & 0x001F00000000FFFFull;
+    v = (v | (v << 16)) & 0x001F0000FF0000FFull;
+    v = (v | (v << 8)) & 0x100F00F00F00F00Full;
+    v = (v | (v << 4)) & 0x10C30C30C30C30C3ull;
+    v = (v | (v << 2)) & 0x1249249249249249ull;
     return v;
 }
 
