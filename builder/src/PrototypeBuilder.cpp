@@ -232,14 +232,17 @@ Result<PrototypeBuildResult> PrototypeBuilder::buildChunked(
             std::uint32_t index = 0;
             while (true) {
                 TopNode& node = top[index];
+                // A chunk takes every triangle that reaches it: its own octree keeps the ones
+                // wider than its cell at its root. (Kept here, they would hang off a node that
+                // is written from the chunk's record, and be lost.)
+                if (node.chunk >= 0) {
+                    FF_RETURN_IF_ERROR(chunkFiles[static_cast<std::size_t>(node.chunk)].append(std::span(&t, 1)));
+                    break;
+                }
                 if (size > mParams.largeTriangleTolerance * node.cell.size) {
                     node.own.push_back(t);
                     if (++topTriangles > mChunkTriangles)
                         return Status(ErrorCode::OutOfBudget, "too many large triangles above the chunk level; raise --memory-budget");
-                    break;
-                }
-                if (node.chunk >= 0) {
-                    FF_RETURN_IF_ERROR(chunkFiles[static_cast<std::size_t>(node.chunk)].append(std::span(&t, 1)));
                     break;
                 }
                 const auto octant = static_cast<int>((key >> (3 * (countLevel - node.level - 1))) & 7u);
