@@ -158,11 +158,23 @@ Result<PrototypeBuildResult> PrototypeBuilder::buildInMemory(RunFile& triangles,
 Result<PrototypeBuildResult> PrototypeBuilder::buildChunked(
         std::uint32_t prototypeId, RunFile& triangles, const Cell& root, std::uint64_t& spillBytes) {
     // ---- count: triangles per cell at a level fine enough that cells fit a chunk -----------
+    // A triangle is counted down to the cell it stops at (the first cell it is wider than, the
+    // octree's large-triangle rule, with the same float cell sizes as octantCell()), so a cell
+    // whose triangles all stop above it gets no count and hence no (empty) chunk.
     const int countLevel = chooseCountLevel(triangles.count(), mChunkTriangles);
     std::vector<std::unordered_map<std::uint64_t, std::uint64_t>> counts(static_cast<std::size_t>(countLevel + 1));
     FF_RETURN_IF_ERROR(triangles.forEachBatch(1u << 15, [&](std::span<const storage::PackedTriangle> batch) {
-        for (const storage::PackedTriangle& t : batch)
-            ++counts[static_cast<std::size_t>(countLevel)][cellKey(root, centroid(t), countLevel)];
+        for (const storage::PackedTriangle& t : batch) {
+            const float size = extent(t);
+            float cellSize = root.size;
+            int stop = 0;
+            while (stop < countLevel && !(size > mParams.largeTriangleTolerance * cellSize)) {
+                cellSize *= 0.5f;
+                ++stop;
+            }
+            const std::uint64_t key = cellKey(root, centroid(t), countLevel) >> (3 * (countLevel - stop));
+            ++counts[static_cast<std::size_t>(stop)][key];
+        }
         return Status::ok();
     }));
     for (int l = countLevel - 1; l >= 0; --l)
