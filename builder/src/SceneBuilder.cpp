@@ -9,12 +9,14 @@
 #include <nlohmann/json.hpp>
 
 #include <algorithm>
+#include <cerrno>
 #include <chrono>
 #include <cmath>
 #include <fstream>
 #include <limits>
 #include <string>
 #include <thread>
+#include <stdlib.h> // mkdtemp
 #include <unistd.h>
 
 namespace ff::builder {
@@ -71,6 +73,22 @@ struct SceneBuilder::Impl {
     Clock::time_point scanStart = Clock::now();
     bool finished = false;
 
+    Impl() = default;
+    Impl(const Impl&) = delete;
+    Impl& operator=(const Impl&) = delete;
+    /** Whatever happened (finish() failed or was never called), no temporary file survives. */
+    ~Impl() { removeTemporaryFiles(); }
+
+    void removeTemporaryFiles() noexcept {
+        prototypes.clear(); // run files unlink themselves
+        writer.reset();     // an uncommitted writer removes its temporary output
+        if (!tempDirectory.empty()) {
+            std::error_code ec;
+            std::filesystem::remove_all(tempDirectory, ec);
+            tempDirectory.clear();
+        }
+    }
+
     Status spill(PrototypeState& proto, std::span<const storage::PackedTriangle> triangles);
     void progress(const char* phase, std::uint64_t done, std::uint64_t total) const {
         if (options.progress)
@@ -104,11 +122,16 @@ Result<std::unique_ptr<SceneBuilder>> SceneBuilder::create(
     if (parent.empty())
         parent = ".";
     const std::filesystem::path tempRoot = options.tempDirectory.empty() ? parent : options.tempDirectory;
-    impl->tempDirectory = tempRoot / (".farfield-build-" + std::to_string(::getpid()));
     std::error_code ec;
-    std::filesystem::create_directories(impl->tempDirectory, ec);
+    std::filesystem::create_directories(tempRoot, ec);
     if (ec)
-        return Status(ErrorCode::IoError, "cannot create temporary directory " + impl->tempDirectory.string() + ": " + ec.message());
+        return Status(ErrorCode::IoError, "cannot create directory " + tempRoot.string() + ": " + ec.message());
+    // A fresh directory per builder: builders sharing an output directory, in one process or
+    // several, must not share run files. From here on ~Impl removes it on every path.
+    std::string pattern = (tempRoot / ".farfield-build-XXXXXX").string();
+    if (::mkdtemp(pattern.data()) == nullptr)
+        return ioStatus(errno, "cannot create temporary directory in", tempRoot);
+    impl->tempDirectory = pattern;
     storage::SceneWriterOptions writerOptions;
     writerOptions.pageSize = options.pageSize;
     FF_ASSIGN_OR_RETURN(impl->writer, storage::SceneWriter::create(outputPath, writerOptions));
@@ -197,15 +220,11 @@ Result<BuildReport> SceneBuilder::finish() {
         return Clock::now();
     };
     Clock::time_point start = phaseEnd("scan", s.scanStart);
-    auto cleanup = [&s]() {
-        s.prototypes.clear();
-        std::error_code ec;
-        std::filesystem::remove_all(s.tempDirectory, ec);
-    };
+    // "Temporary files are removed either way", as soon as finish() returns.
     struct CleanupGuard {
-        decltype(cleanup)& fn;
-        ~CleanupGuard() { fn(); }
-    } guard{cleanup};
+        Impl& impl;
+        ~CleanupGuard() { impl.removeTemporaryFiles(); }
+    } guard{s};
 
     // ---- partition + buildHierarchy, one prototype at a time ---------------------------------
     const std::uint64_t fixedReserve = std::min<std::uint64_t>(s.options.memoryBudgetBytes / 4, 64ull << 20);
