@@ -301,8 +301,12 @@ Result<BuildReport> SceneBuilder::finish() {
     for (const auto& proto : s.prototypes)
         names.push_back(proto ? proto->name : std::string());
     metadata["prototypeNames"] = names;
-    report.peakRssBytes = peakRssBytes();
-    metadata["build"] = nlohmann::json::parse(buildReportJson(report));
+    // The same input must give the same bytes (DESIGN.md "deterministic output"): the report
+    // stored in the file leaves out timings and memory use; the returned report has them.
+    nlohmann::json build = nlohmann::json::parse(buildReportJson(report));
+    for (const char* machineDependent : {"seconds", "total_seconds", "peak_rss_bytes"})
+        build.erase(machineDependent);
+    metadata["build"] = std::move(build);
     const std::string metadataText = metadata.dump();
     FF_ASSIGN_OR_RETURN(
             storage::SectionEntry metadataSection,
