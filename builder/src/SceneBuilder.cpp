@@ -231,14 +231,17 @@ Result<BuildReport> SceneBuilder::finish() {
     const std::uint64_t chunkBudget = (s.options.memoryBudgetBytes - fixedReserve) / s.options.threads;
     const std::uint64_t chunkTriangles = chunkBudget / kChunkBytesPerTriangle;
     PrototypeBuilder protoBuilder(*s.writer, s.options.hierarchy, chunkTriangles, s.options.threads, s.tempDirectory);
-    std::vector<storage::PrototypeRecord> protoRecords(s.prototypes.size());
-    std::vector<PrototypeSummary> summaries(s.prototypes.size());
-    std::vector<bool> empty(s.prototypes.size(), false);
+    // Prototypes left without triangles get no record (a record needs a root node): the table
+    // holds the others in declaration order, and storedIndex maps declared ids to it.
+    constexpr std::uint32_t kNotStored = std::numeric_limits<std::uint32_t>::max();
+    std::vector<std::uint32_t> storedIndex(s.prototypes.size(), kNotStored);
+    std::vector<storage::PrototypeRecord> protoRecords;
+    std::vector<PrototypeSummary> summaries;
+    nlohmann::json names = nlohmann::json::array(); // per stored prototype
     for (std::size_t p = 0; p < s.prototypes.size(); ++p) {
         s.progress("hierarchy", p, s.prototypes.size());
         PrototypeState& proto = *s.prototypes[p];
         if (proto.run.count() == 0) {
-            empty[p] = true;
             ++report.emptyPrototypes;
             continue;
         }
@@ -246,8 +249,10 @@ Result<BuildReport> SceneBuilder::finish() {
         FF_ASSIGN_OR_RETURN(
                 PrototypeBuildResult built,
                 protoBuilder.build(static_cast<std::uint32_t>(p), proto.run, proto.boundsMin, proto.boundsMax, report.spillBytes));
-        protoRecords[p] = built.record;
-        summaries[p] = std::move(built.summary);
+        storedIndex[p] = static_cast<std::uint32_t>(protoRecords.size());
+        protoRecords.push_back(built.record);
+        summaries.push_back(std::move(built.summary));
+        names.push_back(proto.name);
         report.storedTriangles += built.record.triangleCount;
         report.nodes += built.nodes;
         report.maxDepth = std::max(report.maxDepth, built.maxDepth);
@@ -263,13 +268,14 @@ Result<BuildReport> SceneBuilder::finish() {
     std::vector<storage::InstanceRecord> instanceRecords;
     instanceRecords.reserve(s.instances.size());
     for (const auto& [prototype, transform] : s.instances) {
-        if (empty[prototype])
+        const std::uint32_t stored = storedIndex[prototype];
+        if (stored == kNotStored)
             continue;
         storage::InstanceRecord record{};
         record.transform = toRowMajor3x4(transform);
-        record.prototype = prototype;
+        record.prototype = stored;
         instanceRecords.push_back(record);
-        report.instancedTriangles += protoRecords[prototype].triangleCount;
+        report.instancedTriangles += protoRecords[stored].triangleCount;
     }
     report.instances = instanceRecords.size();
     s.progress("instances", 0, 1);
@@ -297,9 +303,6 @@ Result<BuildReport> SceneBuilder::finish() {
     nlohmann::json metadata = nlohmann::json::parse(s.options.metadataJson, nullptr, false);
     if (!metadata.is_object())
         metadata = nlohmann::json::object();
-    nlohmann::json names = nlohmann::json::array();
-    for (const auto& proto : s.prototypes)
-        names.push_back(proto ? proto->name : std::string());
     metadata["prototypeNames"] = names;
     // The same input must give the same bytes (DESIGN.md "deterministic output"): the report
     // stored in the file leaves out timings and memory use; the returned report has them.
