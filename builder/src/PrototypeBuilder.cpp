@@ -276,8 +276,7 @@ Result<PrototypeBuildResult> PrototypeBuilder::buildChunked(
         }
         return Status::ok();
     }));
-    spillBytes += triangles.bytesWritten();
-    triangles.remove();
+    triangles.remove(); // its bytes were counted by the caller
     for (RunFile& file : chunkFiles) {
         FF_RETURN_IF_ERROR(file.flush());
         spillBytes += file.bytesWritten();

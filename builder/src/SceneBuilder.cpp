@@ -245,6 +245,8 @@ Result<BuildReport> SceneBuilder::finish() {
             ++report.emptyPrototypes;
             continue;
         }
+        // Building reads the run file back from disk: all of it counts as spilled.
+        FF_RETURN_IF_ERROR(proto.run.flush());
         report.spillBytes += proto.run.bytesWritten();
         FF_ASSIGN_OR_RETURN(
                 PrototypeBuildResult built,
