@@ -7,9 +7,8 @@
 #include <ff/storage/ShadingModel.h>
 #include <ff/storage/VertexCodec.h>
 
-#include <gtest/gtest.h>
-
 #include <glm/gtc/matrix_transform.hpp>
+#include <gtest/gtest.h>
 
 #include <array>
 #include <cmath>
@@ -34,7 +33,8 @@ SourceVertex vertex(float x, float y, float z, const glm::vec3& normal, const gl
 }
 
 /** The quad [x0,x1] x [y0,y1] at height z, facing +Z, as two triangles. */
-std::vector<storage::PackedTriangle> quadZ(float x0, float x1, float y0, float y1, float z, const glm::vec3& color) {
+std::vector<storage::PackedTriangle>
+quadZ(float x0, float x1, float y0, float y1, float z, const glm::vec3& color) {
     const glm::vec3 n(0.0f, 0.0f, 1.0f);
     const SourceVertex a = vertex(x0, y0, z, n, color);
     const SourceVertex b = vertex(x1, y0, z, n, color);
@@ -55,7 +55,11 @@ glm::vec3 shadedColor(const storage::PackedVertex& v) {
            light;
 }
 
-void expectFaceNear(const ColorCube& cube, int face, const glm::vec4& expected, float tolerance = kSumTolerance) {
+void expectFaceNear(
+        const ColorCube& cube,
+        int face,
+        const glm::vec4& expected,
+        float tolerance = kSumTolerance) {
     const glm::vec4& got = cube.faces[static_cast<std::size_t>(face)];
     for (int k = 0; k < 4; ++k)
         EXPECT_NEAR(got[k], expected[k], tolerance) << "face " << face << " channel " << k;
@@ -77,7 +81,8 @@ ColorCube uniformCube(const glm::vec4& color) {
 ColorCube distinctOpaqueCube() {
     ColorCube cube;
     for (int f = 0; f < storage::kCubeFaceCount; ++f)
-        cube.faces[static_cast<std::size_t>(f)] = glm::vec4(0.125f * static_cast<float>(f + 1), 0.25f, 0.5f, 1.0f);
+        cube.faces[static_cast<std::size_t>(f)] =
+                glm::vec4(0.125f * static_cast<float>(f + 1), 0.25f, 0.5f, 1.0f);
     return cube;
 }
 
@@ -86,7 +91,8 @@ ColorCube distinctOpaqueCube() {
 TEST(CubeBakerTest, FullyCoveringQuadIsOpaqueOnItsFacesAndInvisibleEdgeOn) {
     CubeBaker baker(8);
     baker.reset(glm::vec3(0.0f), glm::vec3(1.0f));
-    const std::vector<storage::PackedTriangle> quad = quadZ(0.0f, 1.0f, 0.0f, 1.0f, 0.5f, {0.8f, 0.4f, 0.2f});
+    const std::vector<storage::PackedTriangle> quad =
+            quadZ(0.0f, 1.0f, 0.0f, 1.0f, 0.5f, {0.8f, 0.4f, 0.2f});
     baker.addTriangles(quad);
     EXPECT_EQ(baker.coveredSamples(kFaceMinusZ), 64);
     EXPECT_EQ(baker.coveredSamples(kFacePlusZ), 64);
@@ -112,7 +118,8 @@ TEST(CubeBakerTest, FullyCoveringQuadIsOpaqueOnItsFacesAndInvisibleEdgeOn) {
 TEST(CubeBakerTest, QuadOverHalfTheFaceGivesHalfAlphaAndHalfPremultipliedColor) {
     CubeBaker baker(8);
     baker.reset(glm::vec3(0.0f), glm::vec3(1.0f));
-    const std::vector<storage::PackedTriangle> quad = quadZ(0.0f, 0.5f, 0.0f, 1.0f, 0.25f, {0.3f, 0.6f, 0.9f});
+    const std::vector<storage::PackedTriangle> quad =
+            quadZ(0.0f, 0.5f, 0.0f, 1.0f, 0.25f, {0.3f, 0.6f, 0.9f});
     baker.addTriangles(quad);
     const ColorCube cube = baker.finish();
     const glm::vec3 shaded = shadedColor(quad[0].vertices[0]);
@@ -126,8 +133,10 @@ TEST(CubeBakerTest, QuadOverHalfTheFaceGivesHalfAlphaAndHalfPremultipliedColor) 
 TEST(CubeBakerTest, NearestSurfaceWinsPerFace) {
     CubeBaker baker(4);
     baker.reset(glm::vec3(0.0f), glm::vec3(1.0f));
-    const std::vector<storage::PackedTriangle> low = quadZ(0.0f, 1.0f, 0.0f, 1.0f, 0.25f, {1.0f, 0.0f, 0.0f});
-    const std::vector<storage::PackedTriangle> high = quadZ(0.0f, 1.0f, 0.0f, 1.0f, 0.75f, {0.0f, 0.0f, 1.0f});
+    const std::vector<storage::PackedTriangle> low =
+            quadZ(0.0f, 1.0f, 0.0f, 1.0f, 0.25f, {1.0f, 0.0f, 0.0f});
+    const std::vector<storage::PackedTriangle> high =
+            quadZ(0.0f, 1.0f, 0.0f, 1.0f, 0.75f, {0.0f, 0.0f, 1.0f});
     baker.addTriangles(high);
     baker.addTriangles(low);
     const ColorCube cube = baker.finish();
@@ -291,8 +300,16 @@ TEST(CubeBakerTest, TranslucentBoxesCompositeFrontToBack) {
     const glm::vec4 nearColor(0.25f, 0.0f, 0.0f, 0.5f);
     const glm::vec4 farColor(0.0f, 0.5f, 0.0f, 1.0f);
     // Two slabs covering the whole XY face, one above the other.
-    baker.addBox(glm::mat4(1.0f), glm::vec3(0.0f, 0.0f, 0.5f), glm::vec3(1.0f, 1.0f, 1.0f), uniformCube(nearColor));
-    baker.addBox(glm::mat4(1.0f), glm::vec3(0.0f, 0.0f, 0.0f), glm::vec3(1.0f, 1.0f, 0.5f), uniformCube(farColor));
+    baker.addBox(
+            glm::mat4(1.0f),
+            glm::vec3(0.0f, 0.0f, 0.5f),
+            glm::vec3(1.0f, 1.0f, 1.0f),
+            uniformCube(nearColor));
+    baker.addBox(
+            glm::mat4(1.0f),
+            glm::vec3(0.0f, 0.0f, 0.0f),
+            glm::vec3(1.0f, 1.0f, 0.5f),
+            uniformCube(farColor));
     const ColorCube cube = baker.finish();
     expectFaceNear(cube, kFacePlusZ, over(nearColor, farColor));
     expectFaceNear(cube, kFaceMinusZ, over(farColor, nearColor));
@@ -306,7 +323,9 @@ TEST(CubeBakerTest, RotatedBoxCoversTheRightSamples) {
     // The box [-0.25, 0.25]^3 turned 45 degrees about Z and centred in the cell: a diamond
     // |x - 0.5| + |y - 0.5| <= 0.25 * sqrt(2) seen along Z.
     const glm::mat4 transform = glm::rotate(
-            glm::translate(glm::mat4(1.0f), glm::vec3(0.5f)), glm::radians(45.0f), glm::vec3(0.0f, 0.0f, 1.0f));
+            glm::translate(glm::mat4(1.0f), glm::vec3(0.5f)),
+            glm::radians(45.0f),
+            glm::vec3(0.0f, 0.0f, 1.0f));
     baker.addBox(transform, glm::vec3(-0.25f), glm::vec3(0.25f), box);
     const ColorCube cube = baker.finish();
 
@@ -326,10 +345,12 @@ TEST(CubeBakerTest, RotatedBoxCoversTheRightSamples) {
     // Seen along +X the box spans y in 0.5 +- 0.354 (samples 1..6) and z in [0.25, 0.75]
     // (samples 2..5): 24 samples. The local +X face (turned towards +X+Y) fills the upper half in
     // y, the local -Y face (turned towards +X-Y) the lower half.
-    const glm::vec4 expectedPlusX = (12.0f * box.faces[kFacePlusX] + 12.0f * box.faces[kFaceMinusY]) / 64.0f;
+    const glm::vec4 expectedPlusX =
+            (12.0f * box.faces[kFacePlusX] + 12.0f * box.faces[kFaceMinusY]) / 64.0f;
     expectFaceNear(cube, kFacePlusX, expectedPlusX);
     // Seen along +Y: local +X (upper half in x) and local +Y (lower half in x).
-    const glm::vec4 expectedPlusY = (12.0f * box.faces[kFacePlusX] + 12.0f * box.faces[kFacePlusY]) / 64.0f;
+    const glm::vec4 expectedPlusY =
+            (12.0f * box.faces[kFacePlusX] + 12.0f * box.faces[kFacePlusY]) / 64.0f;
     expectFaceNear(cube, kFacePlusY, expectedPlusY);
 }
 
@@ -337,10 +358,15 @@ TEST(CubeBakerTest, BoxSmallerThanASampleStillContributesItsArea) {
     CubeBaker baker(4);
     baker.reset(glm::vec3(0.0f), glm::vec3(1.0f));
     // 0.05 x 0.05 between sample centres: 0.04 of a sample (sample = 0.25 x 0.25).
-    baker.addBox(glm::mat4(1.0f), glm::vec3(0.3f, 0.3f, 0.3f), glm::vec3(0.35f, 0.35f, 0.35f), uniformCube(glm::vec4(1.0f)));
+    baker.addBox(
+            glm::mat4(1.0f),
+            glm::vec3(0.3f, 0.3f, 0.3f),
+            glm::vec3(0.35f, 0.35f, 0.35f),
+            uniformCube(glm::vec4(1.0f)));
     const ColorCube cube = baker.finish();
     for (int face = 0; face < storage::kCubeFaceCount; ++face)
-        EXPECT_NEAR(cube.faces[static_cast<std::size_t>(face)].a, 0.04f / 16.0f, 1e-5f) << "face " << face;
+        EXPECT_NEAR(cube.faces[static_cast<std::size_t>(face)].a, 0.04f / 16.0f, 1e-5f)
+                << "face " << face;
 }
 
 // ---- finish() with an underlay ---------------------------------------------------------------
@@ -382,12 +408,15 @@ TEST(CubeBakerTest, TrianglesCoverTheUnderlay) {
     const QuadrantColors underlay = compositeOctantQuadrants(children);
     CubeBaker baker(8);
     baker.reset(glm::vec3(0.0f), glm::vec3(1.0f));
-    const std::vector<storage::PackedTriangle> quad = quadZ(0.0f, 0.5f, 0.0f, 1.0f, 0.5f, {1.0f, 1.0f, 0.0f});
+    const std::vector<storage::PackedTriangle> quad =
+            quadZ(0.0f, 0.5f, 0.0f, 1.0f, 0.5f, {1.0f, 1.0f, 0.0f});
     baker.addTriangles(quad);
     const ColorCube cube = baker.finish(&underlay);
     // Half the samples see the opaque quad, the other half the children (two 0.5-alpha layers).
-    const glm::vec4 children2 = over(glm::vec4(0.0f, 0.0f, 0.5f, 0.5f), glm::vec4(0.0f, 0.0f, 0.5f, 0.5f));
-    const glm::vec4 expected = 0.5f * glm::vec4(shadedColor(quad[0].vertices[0]), 1.0f) + 0.5f * children2;
+    const glm::vec4 children2 =
+            over(glm::vec4(0.0f, 0.0f, 0.5f, 0.5f), glm::vec4(0.0f, 0.0f, 0.5f, 0.5f));
+    const glm::vec4 expected =
+            0.5f * glm::vec4(shadedColor(quad[0].vertices[0]), 1.0f) + 0.5f * children2;
     expectFaceNear(cube, kFacePlusZ, expected);
     // The X viewers see the quad edge-on: only the children.
     expectFaceNear(cube, kFacePlusX, children2);

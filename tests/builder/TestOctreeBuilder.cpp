@@ -24,7 +24,11 @@ namespace {
 /** A small triangle in the z = const plane whose centroid is `center`; `tag` makes it unique. */
 storage::PackedTriangle triangleAt(const glm::vec3& center, float size, int tag = 0) {
     const glm::vec3 n(0.0f, 0.0f, 1.0f);
-    const glm::vec4 color(static_cast<float>(tag % 256) / 255.0f, static_cast<float>(tag / 256 % 256) / 255.0f, 0.5f, 1.0f);
+    const glm::vec4 color(
+            static_cast<float>(tag % 256) / 255.0f,
+            static_cast<float>(tag / 256 % 256) / 255.0f,
+            0.5f,
+            1.0f);
     const float t = size / 3.0f;
     return packTriangle(
             {center + glm::vec3(-t, -t, 0.0f), n, color},
@@ -35,13 +39,16 @@ storage::PackedTriangle triangleAt(const glm::vec3& center, float size, int tag 
 /** Centres of octant `o` of the unit cell, jittered by `k` so triangles stay apart. */
 glm::vec3 inOctant(int o, int k = 0) {
     const glm::vec3 base((o & 1) ? 0.75f : 0.25f, (o & 2) ? 0.75f : 0.25f, (o & 4) ? 0.75f : 0.25f);
-    return base + glm::vec3(0.01f * static_cast<float>(k % 7), 0.01f * static_cast<float>(k / 7 % 7), 0.0f);
+    return base +
+           glm::vec3(
+                   0.01f * static_cast<float>(k % 7), 0.01f * static_cast<float>(k / 7 % 7), 0.0f);
 }
 
 /** Deterministic pseudo-random numbers in [0, 1). */
 class Lcg {
 public:
-    explicit Lcg(std::uint64_t seed) : mState(seed) {}
+    explicit Lcg(std::uint64_t seed)
+        : mState(seed) {}
     float next() {
         mState = mState * 6364136223846793005ull + 1442695040888963407ull;
         return static_cast<float>(mState >> 40) / static_cast<float>(1ull << 24);
@@ -155,7 +162,9 @@ void expectOctreeInvariants(
             glm::vec3 tlo(std::numeric_limits<float>::infinity());
             glm::vec3 thi(-std::numeric_limits<float>::infinity());
             growBounds(tlo, thi, b.triangles[i]);
-            EXPECT_TRUE(glm::all(glm::lessThanEqual(node.boundsMin, tlo)) && glm::all(glm::lessThanEqual(thi, node.boundsMax)));
+            EXPECT_TRUE(
+                    glm::all(glm::lessThanEqual(node.boundsMin, tlo)) &&
+                    glm::all(glm::lessThanEqual(thi, node.boundsMax)));
         }
 
         // Cube faces are premultiplied alphas in [0, 1].
@@ -182,7 +191,8 @@ void expectOctreeInvariants(
         if (node.childCount == 0) {
             // A leaf: at maxDepth, or drawing its triangles is no dearer than the children's cubes.
             if (node.level < params.maxDepth) {
-                EXPECT_LE(static_cast<float>(small), params.cubeCost * static_cast<float>(nonEmpty));
+                EXPECT_LE(
+                        static_cast<float>(small), params.cubeCost * static_cast<float>(nonEmpty));
             }
             continue;
         }
@@ -212,7 +222,8 @@ void expectOctreeInvariants(
     }
 }
 
-std::vector<storage::PackedTriangle> trianglesInOctants(const std::vector<std::pair<int, int>>& octantCounts) {
+std::vector<storage::PackedTriangle>
+trianglesInOctants(const std::vector<std::pair<int, int>>& octantCounts) {
     std::vector<storage::PackedTriangle> out;
     int tag = 0;
     for (const auto& [octant, count] : octantCounts)
@@ -237,9 +248,11 @@ TEST(OctreeBuilderTest, CellWithMoreThanCubeCostPerChildIsSubdivided) {
     // 7 + 6 in two octants: 13 > 12. The 7 lie in two sub-octants, so that child is a leaf.
     std::vector<storage::PackedTriangle> input = trianglesInOctants({{7, 6}});
     for (int k = 0; k < 4; ++k)
-        input.push_back(triangleAt(glm::vec3(0.1f + 0.01f * static_cast<float>(k), 0.1f, 0.1f), 0.005f, 100 + k));
+        input.push_back(triangleAt(
+                glm::vec3(0.1f + 0.01f * static_cast<float>(k), 0.1f, 0.1f), 0.005f, 100 + k));
     for (int k = 0; k < 3; ++k)
-        input.push_back(triangleAt(glm::vec3(0.4f, 0.4f - 0.01f * static_cast<float>(k), 0.4f), 0.005f, 200 + k));
+        input.push_back(triangleAt(
+                glm::vec3(0.4f, 0.4f - 0.01f * static_cast<float>(k), 0.4f), 0.005f, 200 + k));
     const Built b = build(input);
     ASSERT_EQ(b.nodes.size(), 3u);
     const BuildNode& root = b.nodes[0];
@@ -291,9 +304,9 @@ bool ownsTriangle(const Built& b, const BuildNode& node, const storage::PackedTr
 // first cell it is wider than.
 TEST(OctreeBuilderTest, LargeTrianglesStayAtTheInnerNode) {
     std::vector<storage::PackedTriangle> input = trianglesInOctants({{0, 20}, {3, 20}, {6, 20}});
-    const storage::PackedTriangle wider = triangleAt(glm::vec3(0.5f), 1.2f, 1000);            // > root
-    const storage::PackedTriangle half = triangleAt(glm::vec3(0.3f), 0.75f, 1001);           // > 0.5
-    const storage::PackedTriangle quarter = triangleAt(glm::vec3(0.2f), 0.4f, 1002);         // > 0.25
+    const storage::PackedTriangle wider = triangleAt(glm::vec3(0.5f), 1.2f, 1000);   // > root
+    const storage::PackedTriangle half = triangleAt(glm::vec3(0.3f), 0.75f, 1001);   // > 0.5
+    const storage::PackedTriangle quarter = triangleAt(glm::vec3(0.2f), 0.4f, 1002); // > 0.25
     input.push_back(wider);
     input.push_back(half);
     input.push_back(quarter);
@@ -325,7 +338,8 @@ TEST(OctreeBuilderTest, LargeTrianglesStayAtTheInnerNode) {
 TEST(OctreeBuilderTest, OnlyLargeTrianglesMakeALeaf) {
     std::vector<storage::PackedTriangle> input;
     for (int k = 0; k < 20; ++k)
-        input.push_back(triangleAt(glm::vec3(0.5f, 0.5f, 0.05f * static_cast<float>(k) + 0.01f), 1.5f, k));
+        input.push_back(
+                triangleAt(glm::vec3(0.5f, 0.5f, 0.05f * static_cast<float>(k) + 0.01f), 1.5f, k));
     const Built b = build(input);
     ASSERT_EQ(b.nodes.size(), 1u);
     EXPECT_EQ(b.nodes[0].triangleCount, 20u);
@@ -334,7 +348,8 @@ TEST(OctreeBuilderTest, OnlyLargeTrianglesMakeALeaf) {
 
 TEST(OctreeBuilderTest, MaxDepthStopsCoincidentTriangles) {
     // 1e-4 wide: smaller than every cell down to level 13, so only maxDepth stops them.
-    const std::vector<storage::PackedTriangle> input(50, triangleAt(glm::vec3(0.3f, 0.6f, 0.2f), 1e-4f));
+    const std::vector<storage::PackedTriangle> input(
+            50, triangleAt(glm::vec3(0.3f, 0.6f, 0.2f), 1e-4f));
     for (int maxDepth : {0, 1, 4, 12}) {
         SCOPED_TRACE(::testing::Message() << "maxDepth " << maxDepth);
         HierarchyParams params;
@@ -388,7 +403,12 @@ TEST(OctreeBuilderTest, OutputIsDeterministic) {
     const Built b = build(input);
     ASSERT_EQ(a.nodes.size(), b.nodes.size());
     ASSERT_EQ(a.triangles.size(), b.triangles.size());
-    EXPECT_EQ(std::memcmp(a.triangles.data(), b.triangles.data(), a.triangles.size() * sizeof(a.triangles[0])), 0);
+    EXPECT_EQ(
+            std::memcmp(
+                    a.triangles.data(),
+                    b.triangles.data(),
+                    a.triangles.size() * sizeof(a.triangles[0])),
+            0);
     for (std::size_t i = 0; i < a.nodes.size(); ++i) {
         EXPECT_EQ(a.nodes[i].firstChild, b.nodes[i].firstChild);
         EXPECT_EQ(a.nodes[i].firstTriangle, b.nodes[i].firstTriangle);
