@@ -373,8 +373,12 @@ Result<CameraPath> parsePath(const json& root) {
     return path;
 }
 
+/** The values for JSON, with -0 written as 0 (a quaternion component is often an exact -0). */
 std::vector<double> numbers(std::initializer_list<double> values) {
-    return values;
+    std::vector<double> out;
+    for (const double v : values)
+        out.push_back(v == 0.0 ? 0.0 : v);
+    return out;
 }
 
 } // namespace

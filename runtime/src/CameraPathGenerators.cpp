@@ -107,7 +107,7 @@ Result<CameraPath> makeFlythroughPath(const Bounds& bounds, const PathGeneratorO
     // Waypoints as (along, across) fractions of the box: along the longer horizontal axis, across
     // the other. The first lies outside; the interior ones weave from side to side.
     constexpr std::array<std::array<double, 2>, 7> kWaypoints = {{
-            {-0.30, 0.50},
+            {-0.20, 0.50},
             {0.08, 0.50},
             {0.28, 0.26},
             {0.48, 0.72},

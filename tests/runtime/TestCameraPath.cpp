@@ -417,31 +417,35 @@ TEST(CameraPathGeneratorsTest, OrbitKeepsItsDistanceAndLooksAtTheCentre) {
 TEST(CameraPathGeneratorsTest, FlythroughTravelsInsideAtAThirdOfTheHeight) {
     PathGeneratorOptions options;
     options.frames = 240;
-    for (std::uint64_t seed : {1ULL, 2ULL, 99ULL}) {
-        options.seed = seed;
-        auto path = makeFlythroughPath(kBounds, options);
-        ASSERT_TRUE(path) << path.status().toString();
-        ASSERT_EQ(path->frameCount(), 240);
-        EXPECT_FALSE(
-                inside(path->pose(path->frameTime(0)).position, kBounds)); // enters from outside
-        double shortest = INFINITY;
-        double longest = 0.0;
-        for (std::int64_t f = 0; f < 240; ++f) {
-            const CameraPose p = path->pose(path->frameTime(f));
-            ASSERT_TRUE(finite(p));
-            EXPECT_NEAR(p.position.y, 4.0, 1e-4); // 0 + 12 / 3
-            if (f >= 60 && f < 180) {
-                EXPECT_TRUE(inside(p.position, kBounds)) << "frame " << f << " seed " << seed;
+    const Bounds deep{{0, -30, 0}, {10, 0, 100}}; // deeper than wide: travels along Z
+    for (const Bounds& bounds : {kBounds, deep}) {
+        const double height = bounds.min.y + (bounds.max.y - bounds.min.y) / 3.0;
+        for (std::uint64_t seed : {1ULL, 2ULL, 99ULL}) {
+            options.seed = seed;
+            auto path = makeFlythroughPath(bounds, options);
+            ASSERT_TRUE(path) << path.status().toString();
+            ASSERT_EQ(path->frameCount(), 240);
+            EXPECT_FALSE(inside(path->pose(path->frameTime(0)).position, bounds)); // enters
+            double shortest = INFINITY;
+            double longest = 0.0;
+            for (std::int64_t f = 0; f < 240; ++f) {
+                const CameraPose p = path->pose(path->frameTime(f));
+                ASSERT_TRUE(finite(p));
+                EXPECT_NEAR(p.position.y, height, 1e-4);
+                if (f >= 60) { // inside from a quarter of the path to its end
+                    EXPECT_TRUE(inside(p.position, bounds)) << "frame " << f << " seed " << seed;
+                }
+                if (f + 1 < 240) {
+                    const glm::dvec3 step =
+                            path->pose(path->frameTime(f + 1)).position - p.position;
+                    shortest = std::min(shortest, glm::length(step));
+                    longest = std::max(longest, glm::length(step));
+                    EXPECT_GT(glm::dot(p.forward(), glm::normalize(step)), 0.95)
+                            << "frame " << f; // looks ahead
+                }
             }
-            if (f + 1 < 240) {
-                const glm::dvec3 step = path->pose(path->frameTime(f + 1)).position - p.position;
-                shortest = std::min(shortest, glm::length(step));
-                longest = std::max(longest, glm::length(step));
-                EXPECT_GT(glm::dot(p.forward(), glm::normalize(step)), 0.95)
-                        << "frame " << f; // looks ahead
-            }
+            EXPECT_LT(longest, 1.02 * shortest); // constant speed
         }
-        EXPECT_LT(longest, 1.02 * shortest); // constant speed
     }
     options.seed = 1;
     auto a = makeFlythroughPath(kBounds, options);

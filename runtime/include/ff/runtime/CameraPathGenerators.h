@@ -34,8 +34,8 @@ makeOrbitPath(const Bounds& bounds, const PathGeneratorOptions& options = {});
  * A walk through the scene: starts outside the bounds, enters across the face at -X (or -Z when
  * the scene is deeper than wide) and weaves through the interior at a third of the bounds'
  * height along the longer horizontal axis, looking along the direction of travel at constant
- * speed. From about 15% of the path on, the camera is inside the bounds. The seed moves the
- * waypoints sideways. Errors as makeOrbitPath().
+ * speed. The camera crosses into the bounds within the first fifth of the path and stays inside
+ * to the end. The seed moves the waypoints sideways. Errors as makeOrbitPath().
  */
 [[nodiscard]] Result<CameraPath>
 makeFlythroughPath(const Bounds& bounds, const PathGeneratorOptions& options = {});
