@@ -70,7 +70,7 @@ void runIoThread(SharedQueues& shared, IPageSource& source) {
 /** Main-thread bookkeeping of one page that is not Absent. */
 struct PageEntry {
     PageState state = PageState::Absent;
-    std::unique_ptr<std::byte[]> bytes; ///< Resident: the page
+    std::unique_ptr<std::byte[]> bytes;   ///< Resident: the page
     std::uint64_t usedFrame = kNeverUsed; ///< Resident: last frame whose tryGet() returned it
     Status failure;                       ///< Failed: why
 };
@@ -94,8 +94,8 @@ struct PageCache::Impl {
     std::uint64_t frame = 0;
     std::uint64_t frameBytes = 0; ///< resident bytes tryGet() handed out this frame
     std::uint64_t inFlight = 0;   ///< Pending pages: queued, being read or awaiting pump()
-    std::vector<std::uint64_t> scratchPages;     ///< reused by endFrame()
-    std::vector<Completion> scratchCompletions;  ///< reused by pump()
+    std::vector<std::uint64_t> scratchPages;    ///< reused by endFrame()
+    std::vector<Completion> scratchCompletions; ///< reused by pump()
 
     ~Impl() {
         {
@@ -188,8 +188,8 @@ PageCache::PageCache(std::unique_ptr<Impl> impl)
 
 PageCache::~PageCache() = default;
 
-Result<std::unique_ptr<PageCache>> PageCache::create(
-        std::shared_ptr<IPageSource> source, const PageCacheOptions& options) {
+Result<std::unique_ptr<PageCache>>
+PageCache::create(std::shared_ptr<IPageSource> source, const PageCacheOptions& options) {
     FF_ASSERT(source != nullptr);
     const std::uint32_t pageSize = source->pageSize();
     FF_ASSERT(pageSize > 0);
@@ -221,8 +221,8 @@ Result<std::unique_ptr<PageCache>> PageCache::create(
     } catch (const std::system_error& error) {
         // ~Impl stops and joins the threads already started.
         return Status{
-                ErrorCode::Internal, std::string("cannot start a page cache I/O thread: ") +
-                        error.what()};
+                ErrorCode::Internal,
+                std::string("cannot start a page cache I/O thread: ") + error.what()};
     }
     return std::unique_ptr<PageCache>(new PageCache(std::move(impl)));
 }
@@ -272,10 +272,10 @@ void PageCache::request(std::uint64_t page, float priority) {
     if (page >= m.pageCount) {
         PageEntry& entry = m.entries[page];
         entry.state = PageState::Failed;
-        entry.failure = Status{
-                ErrorCode::InvalidArgument,
-                "page " + std::to_string(page) + ": beyond the source's " +
-                        std::to_string(m.pageCount) + " pages"};
+        entry.failure =
+                Status{ErrorCode::InvalidArgument,
+                       "page " + std::to_string(page) + ": beyond the source's " +
+                               std::to_string(m.pageCount) + " pages"};
         ++m.stats.failed;
         return;
     }

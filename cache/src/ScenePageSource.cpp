@@ -83,8 +83,8 @@ Status ScenePageSource::readPage(std::uint64_t index, std::span<std::byte> out) 
     const std::uint64_t base = index * mPageSize;
     std::size_t done = 0;
     while (done < out.size()) {
-        const ssize_t n = ::pread(
-                mFd, out.data() + done, out.size() - done, static_cast<off_t>(base + done));
+        const ssize_t n =
+                ::pread(mFd, out.data() + done, out.size() - done, static_cast<off_t>(base + done));
         if (n < 0) {
             if (errno == EINTR)
                 continue;

@@ -128,10 +128,10 @@ TEST(ScenePageSourceTest, ReadsConcurrentlyFromSeveralThreads) {
                     }
                     if (!read.isOk())
                         ++wrongStatus;
-                    else if (std::memcmp(
-                                     buffer.data(),
-                                     expected.data() + page * kPageSize,
-                                     kPageSize) != 0)
+                    else if (
+                            std::memcmp(
+                                    buffer.data(), expected.data() + page * kPageSize, kPageSize) !=
+                            0)
                         ++wrongBytes;
                 }
             }

@@ -63,19 +63,19 @@ enum class PageState { Resident, Pending, Failed, Absent };
 /** Counters since creation (a frame's figures are the difference of two snapshots), plus the
  *  current residentBytes and inFlight. */
 struct PageCacheStats {
-    std::uint64_t hits = 0;        ///< tryGet found the page resident
-    std::uint64_t misses = 0;      ///< tryGet did not
-    std::uint64_t requests = 0;    ///< new requests queued
-    std::uint64_t refused = 0;     ///< new requests not queued: maxInFlight reached
-    std::uint64_t cancelled = 0;   ///< queued requests dropped: not renewed, or displaced
-    std::uint64_t completed = 0;   ///< reads moved into the resident set
-    std::uint64_t dropped = 0;     ///< reads that could not fit the budget
-    std::uint64_t failed = 0;      ///< pages that failed (I/O or checksum), each counted once
+    std::uint64_t hits = 0;      ///< tryGet found the page resident
+    std::uint64_t misses = 0;    ///< tryGet did not
+    std::uint64_t requests = 0;  ///< new requests queued
+    std::uint64_t refused = 0;   ///< new requests not queued: maxInFlight reached
+    std::uint64_t cancelled = 0; ///< queued requests dropped: not renewed, or displaced
+    std::uint64_t completed = 0; ///< reads moved into the resident set
+    std::uint64_t dropped = 0;   ///< reads that could not fit the budget
+    std::uint64_t failed = 0;    ///< pages that failed (I/O or checksum), each counted once
     std::uint64_t evicted = 0;
     std::uint64_t bytesRead = 0;
     std::uint64_t residentBytes = 0;
     std::uint64_t peakResidentBytes = 0;
-    std::uint64_t inFlight = 0;    ///< requests queued, being read or waiting for pump()
+    std::uint64_t inFlight = 0; ///< requests queued, being read or waiting for pump()
 };
 
 /**
@@ -88,8 +88,8 @@ class PageCache {
 public:
     /** Starts the I/O threads. Errors: InvalidArgument when the budget cannot hold even one
      *  page, or when ioThreads or maxInFlight is 0 or hysteresis is outside [0, 1). */
-    [[nodiscard]] static Result<std::unique_ptr<PageCache>> create(
-            std::shared_ptr<IPageSource> source, const PageCacheOptions& options);
+    [[nodiscard]] static Result<std::unique_ptr<PageCache>>
+    create(std::shared_ptr<IPageSource> source, const PageCacheOptions& options);
     ~PageCache();
     PageCache(const PageCache&) = delete;
     PageCache& operator=(const PageCache&) = delete;

@@ -25,8 +25,8 @@ public:
     /** Opens `path` and checks its header page through storage::SceneFile (page size, page
      *  count, struct sizes). Errors: those of SceneFile::open (NotFound, IoError, Corrupt,
      *  Unsupported), prefixed with the path. */
-    [[nodiscard]] static Result<std::unique_ptr<ScenePageSource>> open(
-            const std::filesystem::path& path);
+    [[nodiscard]] static Result<std::unique_ptr<ScenePageSource>>
+    open(const std::filesystem::path& path);
 
     ~ScenePageSource() override;
     ScenePageSource(const ScenePageSource&) = delete;
