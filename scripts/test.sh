@@ -16,5 +16,5 @@ export UBSAN_OPTIONS="print_stacktrace=1:halt_on_error=1"
 ctest --test-dir build-asan --output-on-failure -j "$jobs"
 
 cmake -S . -B build-tsan -G Ninja -DCMAKE_BUILD_TYPE=Debug -DFF_WERROR=ON -DFF_SANITIZE=thread
-cmake --build build-tsan -j "$jobs" --target ff_builder_tests ff_storage_tests
-ctest --test-dir build-tsan --output-on-failure -j "$jobs" -L "builder|storage"
+cmake --build build-tsan -j "$jobs" --target ff_builder_tests ff_storage_tests ff_cache_tests
+ctest --test-dir build-tsan --output-on-failure -j "$jobs" -L "builder|storage|cache"

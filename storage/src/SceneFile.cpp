@@ -2,6 +2,7 @@
 #include "PosixError.h"
 #include "SectionTable.h"
 
+#include <ff/storage/PageCheck.h>
 #include <ff/storage/SceneFile.h>
 #include <ff/storage/SceneWriter.h>
 
@@ -68,31 +69,6 @@ bool allFinite(const std::array<float, 3>& v) noexcept {
 
 bool ordered(const std::array<float, 3>& lo, const std::array<float, 3>& hi) noexcept {
     return lo[0] <= hi[0] && lo[1] <= hi[1] && lo[2] <= hi[2];
-}
-
-/**
- * Checks the trailer and checksum of `page` (a whole page in the file). Only the trailer type
- * is left to the caller, so that an intact page can be cached whatever type was expected.
- */
-Status checkIntact(std::span<const std::byte> page, std::uint64_t index) {
-    const PageTrailer trailer = readTrailer(page);
-    if (trailer.magic != kPageTrailerMagic)
-        return corrupt(
-                index,
-                "bad trailer magic " + hex(trailer.magic) + " (expected " + hex(kPageTrailerMagic) +
-                        ")");
-    const std::uint64_t computed = pageChecksum(page);
-    if (trailer.checksum != computed)
-        return corrupt(
-                index,
-                "checksum mismatch (stored " + hex(trailer.checksum) + ", computed " +
-                        hex(computed) + ")");
-    if (trailer.pageIndex != index)
-        return corrupt(
-                index,
-                "trailer names page " + std::to_string(trailer.pageIndex) +
-                        " (page written to the wrong place)");
-    return Status::ok();
 }
 
 Status checkType(std::uint16_t type, std::uint64_t index, PageTypeMask expected) {
@@ -170,7 +146,7 @@ struct SceneFile::Impl {
                     index,
                     "beyond end of file (the file has " + std::to_string(pageCount) + " pages)");
         if (verified[index].load(std::memory_order_acquire) == kUnverified) {
-            FF_RETURN_IF_ERROR(checkIntact(page(index), index));
+            FF_RETURN_IF_ERROR(verifyPageBytes(page(index), index));
             verified[index].store(kIntact, std::memory_order_release);
         }
         return checkType(readTrailer(page(index)).pageType, index, expected);
@@ -240,7 +216,7 @@ Status SceneFile::Impl::openHeader() {
     pageSize = header.pageSize;
     if (size < pageSize)
         return corrupt(0, truncatedMessage(size));
-    FF_RETURN_IF_ERROR(checkIntact(page(0), 0));
+    FF_RETURN_IF_ERROR(verifyPageBytes(page(0), 0));
     FF_RETURN_IF_ERROR(checkType(readTrailer(page(0)).pageType, 0, maskOf(PageType::Header)));
 
     const struct {

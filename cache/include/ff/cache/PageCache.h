@@ -14,6 +14,15 @@
 // Budget: resident bytes (pages handed out by tryGet and kept) never exceed budgetBytes; reads
 // in flight hold their own buffers, bounded by maxInFlight pages. A completion that cannot fit
 // without evicting a page the current frame uses is dropped (and counted), never forced in.
+// The one exception is setBudget() below the bytes the current frame holds: see there.
+//
+// Page life cycle (state()):  Absent -request-> Pending -read ok, fits-> Resident -evict-> Absent
+//                             Pending -not renewed by endFrame()/displaced/dropped-> Absent
+//                             Pending -read error-> Failed (final: never read again)
+//
+// Threads: the creating thread is "the main thread"; every method but the destructor asserts
+// it runs there. The cache owns options.ioThreads I/O threads, which share only the request
+// queue and the completion queue with it (under one mutex) and never touch the resident set.
 
 #include <ff/storage/Status.h>
 
@@ -38,62 +47,84 @@ public:
 struct PageCacheOptions {
     std::uint64_t budgetBytes = 256ull << 20; ///< hard limit on resident page bytes
     unsigned ioThreads = 2;
-    std::uint32_t maxInFlight = 64; ///< reads queued or running at once
+    /** Requests queued, being read or waiting for pump() at once (>= 1): bounds the memory
+     *  held outside the budget to maxInFlight pages. When full, a new request displaces the
+     *  lowest-priority queued one if its priority is higher, else it is refused (stats.refused)
+     *  and the caller asks again next frame. */
+    std::uint32_t maxInFlight = 64;
     /** When a completion needs room, evict down to (1 - hysteresis) x budget rather than to
      *  exactly what it needs, so a working set at the edge of the budget does not evict one
-     *  page per install, every frame. 0 disables. */
+     *  page per install, every frame. In [0, 1); 0 disables. */
     double hysteresis = 0.05;
 };
 
 enum class PageState { Resident, Pending, Failed, Absent };
 
-/** Per-frame and cumulative counters. */
+/** Counters since creation (a frame's figures are the difference of two snapshots), plus the
+ *  current residentBytes and inFlight. */
 struct PageCacheStats {
-    std::uint64_t hits = 0;        ///< tryGet found the page resident
-    std::uint64_t misses = 0;      ///< tryGet did not
-    std::uint64_t requests = 0;    ///< new requests queued
-    std::uint64_t cancelled = 0;   ///< requests dropped because no frame renewed them
-    std::uint64_t completed = 0;   ///< reads moved into the resident set
-    std::uint64_t dropped = 0;     ///< reads that could not fit the budget
-    std::uint64_t failed = 0;      ///< reads that failed (I/O or checksum)
+    std::uint64_t hits = 0;      ///< tryGet found the page resident
+    std::uint64_t misses = 0;    ///< tryGet did not
+    std::uint64_t requests = 0;  ///< new requests queued
+    std::uint64_t refused = 0;   ///< new requests not queued: maxInFlight reached
+    std::uint64_t cancelled = 0; ///< queued requests dropped: not renewed, or displaced
+    std::uint64_t completed = 0; ///< reads moved into the resident set
+    std::uint64_t dropped = 0;   ///< reads that could not fit the budget
+    std::uint64_t failed = 0;    ///< pages that failed (I/O or checksum), each counted once
     std::uint64_t evicted = 0;
     std::uint64_t bytesRead = 0;
     std::uint64_t residentBytes = 0;
     std::uint64_t peakResidentBytes = 0;
-    std::uint64_t inFlight = 0;
+    std::uint64_t inFlight = 0; ///< requests queued, being read or waiting for pump()
 };
 
 /**
  * See the architecture note above. Main-thread methods assert they are called from the thread
- * that created the cache. Destruction cancels queued reads and joins the I/O threads.
+ * that created the cache. Destruction cancels queued reads, waits for the reads already running
+ * (IPageSource::readPage must return), joins the I/O threads and frees every buffer; it may run
+ * on any thread once no other call on the cache is running.
  */
 class PageCache {
 public:
-    /** Errors: InvalidArgument when the budget cannot hold even one page. */
-    [[nodiscard]] static Result<std::unique_ptr<PageCache>> create(
-            std::shared_ptr<IPageSource> source, const PageCacheOptions& options);
+    /** Starts the I/O threads. Errors: InvalidArgument when the budget cannot hold even one
+     *  page, or when ioThreads or maxInFlight is 0 or hysteresis is outside [0, 1). */
+    [[nodiscard]] static Result<std::unique_ptr<PageCache>>
+    create(std::shared_ptr<IPageSource> source, const PageCacheOptions& options);
     ~PageCache();
     PageCache(const PageCache&) = delete;
     PageCache& operator=(const PageCache&) = delete;
 
+    /** Starts a frame: pages used by the previous frame become evictable again (and, after a
+     *  setBudget() below them, are evicted down to the budget now). */
     void beginFrame();
     /** The bytes of a resident page, marked used by this frame (not evictable until the next
      *  beginFrame). The span stays valid until then. Counts a hit or a miss. */
     std::optional<std::span<const std::byte>> tryGet(std::uint64_t page);
-    /** Asks for a page; a higher priority is fetched first. Renewing a request updates its
-     *  priority. No-op for resident or failed pages. */
+    /** Asks for a page; a higher priority is fetched first (equal priorities: first asked, first
+     *  read). Renewing a request updates its priority and keeps it alive through endFrame().
+     *  No-op for resident or failed pages. A page >= the source's pageCount fails at once
+     *  (Failed, InvalidArgument). `priority` must not be NaN. */
     void request(std::uint64_t page, float priority);
     PageState state(std::uint64_t page) const;
-    /** Cancels queued requests that this frame did not renew. */
+    /** Why page `page` failed (the IPageSource error, e.g. Corrupt "page 12: checksum
+     *  mismatch ..."); nullopt unless state(page) is Failed. */
+    std::optional<Status> failure(std::uint64_t page) const;
+    /** Cancels queued requests that this frame did not renew (request() since beginFrame());
+     *  reads already running are not cancelled: they complete and are installed if they fit. */
     void endFrame();
-    /** Installs at most maxCompletions finished reads; returns how many were installed. */
+    /** Handles at most maxCompletions finished reads, oldest first: each is installed (evicting
+     *  as needed), dropped (no room without evicting a page of the current frame) or marked
+     *  Failed. Returns how many were installed. Never blocks on I/O. */
     std::size_t pump(std::size_t maxCompletions);
     /** Blocks until nothing is queued or in flight (tests, --sync mode), then pumps all. */
     void drain();
 
     const PageCacheStats& stats() const noexcept;
     std::uint64_t budgetBytes() const noexcept;
-    /** Changes the budget (evicting as needed, never pages used by the current frame). */
+    /** Changes the budget (at least one page: asserted), evicting as needed, never pages used
+     *  by the current frame. Should those alone exceed the new budget, residentBytes stays
+     *  above budgetBytes until the next beginFrame(), which evicts down to it; no completion is
+     *  installed meanwhile. This is the only time residentBytes > budgetBytes. */
     void setBudget(std::uint64_t bytes);
 
 private:

@@ -1,0 +1,389 @@
+#include "RequestQueue.h"
+
+#include <ff/cache/PageCache.h>
+#include <ff/cache/PageLru.h>
+
+#include <cmath>
+#include <condition_variable>
+#include <deque>
+#include <limits>
+#include <mutex>
+#include <string>
+#include <system_error>
+#include <thread>
+#include <unordered_map>
+#include <utility>
+#include <vector>
+
+namespace ff::cache {
+
+namespace {
+
+constexpr std::uint64_t kNeverUsed = std::numeric_limits<std::uint64_t>::max();
+
+/** A finished read on its way from an I/O thread to the main thread. */
+struct Completion {
+    std::uint64_t page = 0;
+    std::unique_ptr<std::byte[]> bytes; ///< pageSize bytes; null when `status` is an error
+    Status status;
+};
+
+/**
+ * What the I/O threads share with the main thread, all guarded by `mutex`. Held through a
+ * shared_ptr that each I/O thread captures by value, so a thread never refers to the cache.
+ */
+struct SharedQueues {
+    std::mutex mutex;
+    std::condition_variable workAvailable; ///< queue not empty, or stopping
+    std::condition_variable readFinished;  ///< a read moved to `completions` (drain() waits)
+    RequestQueue queue;                    ///< requests no thread has taken yet
+    std::deque<Completion> completions;    ///< finished reads, oldest first, for pump()
+    unsigned running = 0;                  ///< reads taken from `queue`, not yet in `completions`
+    bool stopping = false;
+};
+
+/** One I/O thread: take the highest-priority request, read it outside the lock, hand it over. */
+void runIoThread(SharedQueues& shared, IPageSource& source) {
+    const std::size_t pageSize = source.pageSize();
+    std::unique_lock lock(shared.mutex);
+    for (;;) {
+        shared.workAvailable.wait(
+                lock, [&shared] { return shared.stopping || !shared.queue.empty(); });
+        if (shared.stopping)
+            return;
+        const std::uint64_t page = *shared.queue.popHighest();
+        ++shared.running;
+        lock.unlock();
+
+        auto bytes = std::make_unique_for_overwrite<std::byte[]>(pageSize);
+        Status status = source.readPage(page, {bytes.get(), pageSize});
+        if (!status.isOk())
+            bytes.reset();
+
+        lock.lock();
+        --shared.running;
+        shared.completions.push_back({page, std::move(bytes), std::move(status)});
+        shared.readFinished.notify_all();
+    }
+}
+
+/** Main-thread bookkeeping of one page that is not Absent. */
+struct PageEntry {
+    PageState state = PageState::Absent;
+    std::unique_ptr<std::byte[]> bytes;   ///< Resident: the page
+    std::uint64_t usedFrame = kNeverUsed; ///< Resident: last frame whose tryGet() returned it
+    Status failure;                       ///< Failed: why
+};
+
+} // namespace
+
+struct PageCache::Impl {
+    std::shared_ptr<IPageSource> source;
+    PageCacheOptions options;
+    std::uint32_t pageSize = 0;
+    std::uint64_t pageCount = 0;
+    std::thread::id owner = std::this_thread::get_id();
+
+    std::shared_ptr<SharedQueues> shared = std::make_shared<SharedQueues>();
+    std::vector<std::thread> ioThreads;
+
+    // ---- main thread only ----
+    std::unordered_map<std::uint64_t, PageEntry> entries; ///< pages not Absent
+    PageLru lru;                                          ///< resident pages
+    PageCacheStats stats;
+    std::uint64_t frame = 0;
+    std::uint64_t frameBytes = 0; ///< resident bytes tryGet() handed out this frame
+    std::uint64_t inFlight = 0;   ///< Pending pages: queued, being read or awaiting pump()
+    std::vector<std::uint64_t> scratchPages;    ///< reused by endFrame()
+    std::vector<Completion> scratchCompletions; ///< reused by pump()
+
+    ~Impl() {
+        {
+            std::lock_guard lock(shared->mutex);
+            shared->stopping = true;
+            shared->queue.clear();
+        }
+        shared->workAvailable.notify_all();
+        for (std::thread& thread : ioThreads)
+            thread.join();
+        // Completions not pumped and resident pages are freed with `shared` and `entries`.
+    }
+
+    bool onOwnerThread() const { return std::this_thread::get_id() == owner; }
+
+    /** Where eviction aims when a completion needs room: (1 - hysteresis) x budget after the
+     *  install, but never less room than the one page being installed. */
+    std::uint64_t lowWater() const {
+        const std::uint64_t budget = options.budgetBytes;
+        const auto lowBudget = static_cast<std::uint64_t>(
+                static_cast<double>(budget) * (1.0 - options.hysteresis));
+        const std::uint64_t afterInstall = std::min(lowBudget, budget);
+        return afterInstall >= pageSize ? afterInstall - pageSize : 0;
+    }
+
+    void evict(std::uint64_t page) {
+        const auto it = entries.find(page);
+        FF_ASSERT(it != entries.end() && it->second.state == PageState::Resident);
+        FF_ASSERT(it->second.usedFrame != frame);
+        entries.erase(it);
+        lru.erase(page);
+        stats.residentBytes -= pageSize;
+        ++stats.evicted;
+    }
+
+    /** Evicts least-recently-used pages not used by the current frame until residentBytes <=
+     *  target or only the current frame's pages are left. */
+    void evictDownTo(std::uint64_t target) {
+        // Pages used this frame were touched by tryGet(), so the walk from the oldest end meets
+        // evictable pages first; frameBytes tells when none is left without walking.
+        while (stats.residentBytes > target && stats.residentBytes > frameBytes) {
+            const auto victim = lru.oldestWhereNot([this](std::uint64_t page) {
+                return entries.find(page)->second.usedFrame == frame;
+            });
+            FF_ASSERT(victim.has_value());
+            evict(*victim);
+        }
+    }
+
+    /** Installs, drops or fails one completion; true if installed. */
+    bool handle(Completion& done) {
+        const auto it = entries.find(done.page);
+        // Only queued requests are ever cancelled, so a finished read's page is still Pending.
+        FF_ASSERT(it != entries.end() && it->second.state == PageState::Pending);
+        PageEntry& entry = it->second;
+        --inFlight;
+
+        if (!done.status.isOk()) {
+            entry.state = PageState::Failed;
+            entry.failure = std::move(done.status);
+            ++stats.failed;
+            return false;
+        }
+        stats.bytesRead += pageSize;
+        const std::uint64_t budget = options.budgetBytes;
+        if (stats.residentBytes + pageSize > budget) {
+            // Decide before evicting anything: a page that cannot fit even after evicting every
+            // page the current frame does not use is dropped, and nothing is evicted for it.
+            if (frameBytes + pageSize > budget) {
+                entries.erase(it);
+                ++stats.dropped;
+                return false;
+            }
+            evictDownTo(std::min(lowWater(), budget - pageSize));
+        }
+        FF_ASSERT(stats.residentBytes + pageSize <= budget);
+        entry.state = PageState::Resident;
+        entry.bytes = std::move(done.bytes);
+        entry.usedFrame = kNeverUsed;
+        lru.touch(done.page);
+        stats.residentBytes += pageSize;
+        stats.peakResidentBytes = std::max(stats.peakResidentBytes, stats.residentBytes);
+        ++stats.completed;
+        return true;
+    }
+};
+
+PageCache::PageCache(std::unique_ptr<Impl> impl)
+    : mImpl(std::move(impl)) {}
+
+PageCache::~PageCache() = default;
+
+Result<std::unique_ptr<PageCache>>
+PageCache::create(std::shared_ptr<IPageSource> source, const PageCacheOptions& options) {
+    FF_ASSERT(source != nullptr);
+    const std::uint32_t pageSize = source->pageSize();
+    FF_ASSERT(pageSize > 0);
+    if (options.budgetBytes < pageSize)
+        return Status{
+                ErrorCode::InvalidArgument,
+                "page cache budget of " + std::to_string(options.budgetBytes) +
+                        " bytes cannot hold one page of " + std::to_string(pageSize) + " bytes"};
+    if (options.ioThreads == 0)
+        return Status{ErrorCode::InvalidArgument, "page cache needs at least one I/O thread"};
+    if (options.maxInFlight == 0)
+        return Status{ErrorCode::InvalidArgument, "page cache maxInFlight must be at least 1"};
+    if (!(options.hysteresis >= 0.0 && options.hysteresis < 1.0))
+        return Status{
+                ErrorCode::InvalidArgument,
+                "page cache hysteresis " + std::to_string(options.hysteresis) +
+                        " is outside [0, 1)"};
+
+    auto impl = std::make_unique<Impl>();
+    impl->source = source;
+    impl->options = options;
+    impl->pageSize = pageSize;
+    impl->pageCount = source->pageCount();
+    impl->ioThreads.reserve(options.ioThreads);
+    const std::shared_ptr<SharedQueues> shared = impl->shared;
+    try {
+        for (unsigned i = 0; i < options.ioThreads; ++i)
+            impl->ioThreads.emplace_back([shared, source] { runIoThread(*shared, *source); });
+    } catch (const std::system_error& error) {
+        // ~Impl stops and joins the threads already started.
+        return Status{
+                ErrorCode::Internal,
+                std::string("cannot start a page cache I/O thread: ") + error.what()};
+    }
+    return std::unique_ptr<PageCache>(new PageCache(std::move(impl)));
+}
+
+void PageCache::beginFrame() {
+    Impl& m = *mImpl;
+    FF_ASSERT(m.onOwnerThread());
+    ++m.frame;
+    m.frameBytes = 0;
+    // After a setBudget() below what the previous frame held: nothing is protected now.
+    if (m.stats.residentBytes > m.options.budgetBytes)
+        m.evictDownTo(m.options.budgetBytes);
+}
+
+std::optional<std::span<const std::byte>> PageCache::tryGet(std::uint64_t page) {
+    Impl& m = *mImpl;
+    FF_ASSERT(m.onOwnerThread());
+    const auto it = m.entries.find(page);
+    if (it == m.entries.end() || it->second.state != PageState::Resident) {
+        ++m.stats.misses;
+        return std::nullopt;
+    }
+    ++m.stats.hits;
+    PageEntry& entry = it->second;
+    if (entry.usedFrame != m.frame) {
+        entry.usedFrame = m.frame;
+        m.frameBytes += m.pageSize;
+    }
+    m.lru.touch(page);
+    return std::span<const std::byte>(entry.bytes.get(), m.pageSize);
+}
+
+void PageCache::request(std::uint64_t page, float priority) {
+    Impl& m = *mImpl;
+    FF_ASSERT(m.onOwnerThread());
+    FF_ASSERT(!std::isnan(priority));
+    const auto it = m.entries.find(page);
+    if (it != m.entries.end()) {
+        if (it->second.state == PageState::Pending) {
+            // Still queued: new priority, alive through endFrame(). Already taken by an I/O
+            // thread: nothing to renew, the read completes anyway.
+            std::lock_guard lock(m.shared->mutex);
+            m.shared->queue.renew(page, priority, m.frame);
+        }
+        return; // Resident or Failed: no-op
+    }
+    if (page >= m.pageCount) {
+        PageEntry& entry = m.entries[page];
+        entry.state = PageState::Failed;
+        entry.failure =
+                Status{ErrorCode::InvalidArgument,
+                       "page " + std::to_string(page) + ": beyond the source's " +
+                               std::to_string(m.pageCount) + " pages"};
+        ++m.stats.failed;
+        return;
+    }
+    {
+        std::lock_guard lock(m.shared->mutex);
+        if (m.inFlight >= m.options.maxInFlight) {
+            // Full: displace the least urgent queued request if this one is more urgent.
+            const auto lowest = m.shared->queue.lowest();
+            if (!lowest || lowest->second >= priority) {
+                ++m.stats.refused;
+                return;
+            }
+            m.shared->queue.erase(lowest->first);
+            m.entries.erase(lowest->first);
+            --m.inFlight;
+            ++m.stats.cancelled;
+        }
+        m.shared->queue.push(page, priority, m.frame);
+    }
+    m.shared->workAvailable.notify_one();
+    m.entries[page].state = PageState::Pending;
+    ++m.inFlight;
+    ++m.stats.requests;
+    m.stats.inFlight = m.inFlight;
+}
+
+PageState PageCache::state(std::uint64_t page) const {
+    const Impl& m = *mImpl;
+    FF_ASSERT(m.onOwnerThread());
+    const auto it = m.entries.find(page);
+    return it == m.entries.end() ? PageState::Absent : it->second.state;
+}
+
+std::optional<Status> PageCache::failure(std::uint64_t page) const {
+    const Impl& m = *mImpl;
+    FF_ASSERT(m.onOwnerThread());
+    const auto it = m.entries.find(page);
+    if (it == m.entries.end() || it->second.state != PageState::Failed)
+        return std::nullopt;
+    return it->second.failure;
+}
+
+void PageCache::endFrame() {
+    Impl& m = *mImpl;
+    FF_ASSERT(m.onOwnerThread());
+    m.scratchPages.clear();
+    {
+        std::lock_guard lock(m.shared->mutex);
+        m.shared->queue.removeNotRenewedIn(m.frame, m.scratchPages);
+    }
+    for (const std::uint64_t page : m.scratchPages)
+        m.entries.erase(page);
+    m.inFlight -= m.scratchPages.size();
+    m.stats.cancelled += m.scratchPages.size();
+    m.stats.inFlight = m.inFlight;
+}
+
+std::size_t PageCache::pump(std::size_t maxCompletions) {
+    Impl& m = *mImpl;
+    FF_ASSERT(m.onOwnerThread());
+    m.scratchCompletions.clear();
+    {
+        std::lock_guard lock(m.shared->mutex);
+        auto& completions = m.shared->completions;
+        while (m.scratchCompletions.size() < maxCompletions && !completions.empty()) {
+            m.scratchCompletions.push_back(std::move(completions.front()));
+            completions.pop_front();
+        }
+    }
+    std::size_t installed = 0;
+    for (Completion& done : m.scratchCompletions) {
+        if (m.handle(done))
+            ++installed;
+    }
+    m.scratchCompletions.clear(); // frees the buffers of dropped reads
+    m.stats.inFlight = m.inFlight;
+    return installed;
+}
+
+void PageCache::drain() {
+    Impl& m = *mImpl;
+    FF_ASSERT(m.onOwnerThread());
+    {
+        SharedQueues& shared = *m.shared;
+        std::unique_lock lock(shared.mutex);
+        shared.readFinished.wait(
+                lock, [&shared] { return shared.queue.empty() && shared.running == 0; });
+    }
+    pump(std::numeric_limits<std::size_t>::max());
+}
+
+const PageCacheStats& PageCache::stats() const noexcept {
+    FF_ASSERT(mImpl->onOwnerThread());
+    return mImpl->stats;
+}
+
+std::uint64_t PageCache::budgetBytes() const noexcept {
+    FF_ASSERT(mImpl->onOwnerThread());
+    return mImpl->options.budgetBytes;
+}
+
+void PageCache::setBudget(std::uint64_t bytes) {
+    Impl& m = *mImpl;
+    FF_ASSERT(m.onOwnerThread());
+    FF_ASSERT(bytes >= m.pageSize);
+    m.options.budgetBytes = bytes;
+    if (m.stats.residentBytes > bytes)
+        m.evictDownTo(bytes);
+}
+
+} // namespace ff::cache
