@@ -27,6 +27,26 @@ glm::vec3 shadedVertexColor(const storage::PackedVertex& v) {
 
 glm::vec3 toVec3(const std::array<float, 3>& a) { return {a[0], a[1], a[2]}; }
 
+// The underlay colour of sample (i, j) of a face. With an even resolution the quadrant boundaries
+// fall between samples. With an odd one the middle row and column lie on them: those samples take
+// the mean of the quadrants they touch, so every quadrant keeps the weight 1/4 that Fig. 3's
+// average gives it.
+glm::vec4 underlayColor(const std::array<glm::vec4, 4>& quadrants, int i, int j, int resolution) {
+    const int half = resolution / 2;
+    const bool odd = resolution % 2 == 1;
+    const bool middleU = odd && i == half;
+    const bool middleV = odd && j == half;
+    const std::size_t qu = i < half ? 0 : 1;
+    const std::size_t qv = j < half ? 0 : 1;
+    if (middleU && middleV)
+        return 0.25f * (quadrants[0] + quadrants[1] + quadrants[2] + quadrants[3]);
+    if (middleU)
+        return 0.5f * (quadrants[2 * qv] + quadrants[1 + 2 * qv]);
+    if (middleV)
+        return 0.5f * (quadrants[qu] + quadrants[qu + 2]);
+    return quadrants[qu + 2 * qv];
+}
+
 } // namespace
 
 std::array<std::array<std::uint8_t, 4>, storage::kCubeFaceCount> quantizeCube(const ColorCube& cube) {
@@ -276,7 +296,6 @@ int CubeBaker::coveredSamples(int face) const {
 
 ColorCube CubeBaker::finish(const QuadrantColors* underlay) {
     ColorCube cube;
-    const int half = mResolution / 2;
     const auto samples = static_cast<std::size_t>(mResolution * mResolution);
     std::vector<glm::vec4> boxColor;
     for (int face = 0; face < storage::kCubeFaceCount; ++face) {
@@ -307,12 +326,8 @@ ColorCube CubeBaker::finish(const QuadrantColors* underlay) {
                     continue;
                 }
                 glm::vec4 color = boxColor[s];
-                if (underlay) {
-                    // With an odd resolution the middle row/column belongs to the upper half.
-                    const int qu = i >= half ? 1 : 0;
-                    const int qv = j >= half ? 1 : 0;
-                    color = over(color, (*underlay)[f][static_cast<std::size_t>(qu + 2 * qv)]);
-                }
+                if (underlay)
+                    color = over(color, underlayColor((*underlay)[f], i, j, mResolution));
                 sum += color;
             }
         }

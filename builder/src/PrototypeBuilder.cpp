@@ -38,13 +38,14 @@ struct TopNode {
 constexpr int kMaxCountLevel = 16;
 
 std::uint64_t spreadBits(std::uint64_t v) {
-    // Interleave 16 bits with two zero bits between each.
+    // Interleave 16 bits with two zero bits between each: the classic 21-bit magic numbers
+    // (bit i lands at bit 3i). Each mask keeps only the copies that belong where they landed.
     v &= 0xFFFF;
-    v = (v | (v << 32)) & 0x0000FFFF0000FFFFull; // not all steps are needed for 16 bits, but
-    v = (v | (v << 16)) & 0x00FF0000FF0000FFull; // these keep the classic masks recognisable
-    v = (v | (v << 8)) & 0xF00F00F00F00F00Full;
-    v = (v | (v << 4)) & 0x30C30C30C30C30C3ull;
-    v = (v | (v << 2)) & 0x9249249249249249ull;
+    v = (v | (v << 32)) & 0x001F00000000FFFFull;
+    v = (v | (v << 16)) & 0x001F0000FF0000FFull;
+    v = (v | (v << 8)) & 0x100F00F00F00F00Full;
+    v = (v | (v << 4)) & 0x10C30C30C30C30C3ull;
+    v = (v | (v << 2)) & 0x1249249249249249ull;
     return v;
 }
 
@@ -157,60 +158,80 @@ Result<PrototypeBuildResult> PrototypeBuilder::buildInMemory(RunFile& triangles,
 Result<PrototypeBuildResult> PrototypeBuilder::buildChunked(
         std::uint32_t prototypeId, RunFile& triangles, const Cell& root, std::uint64_t& spillBytes) {
     // ---- count: triangles per cell at a level fine enough that cells fit a chunk -----------
-    const int countLevel = chooseCountLevel(triangles.count(), mChunkTriangles);
-    std::vector<std::unordered_map<std::uint64_t, std::uint64_t>> counts(static_cast<std::size_t>(countLevel + 1));
-    FF_RETURN_IF_ERROR(triangles.forEachBatch(1u << 15, [&](std::span<const storage::PackedTriangle> batch) {
-        for (const storage::PackedTriangle& t : batch)
-            ++counts[static_cast<std::size_t>(countLevel)][cellKey(root, centroid(t), countLevel)];
-        return Status::ok();
-    }));
-    for (int l = countLevel - 1; l >= 0; --l)
-        for (const auto& [key, count] : counts[static_cast<std::size_t>(l + 1)])
-            counts[static_cast<std::size_t>(l)][key >> 3] += count;
-
-    // ---- select chunks top-down: the largest cells that fit ---------------------------------
+    // A triangle is counted down to the cell it stops at (the first cell it is wider than, the
+    // octree's large-triangle rule, with the same float cell sizes as octantCell()), so a cell
+    // whose triangles all stop above it gets no count and hence no (empty) chunk. A cluster
+    // denser than the chosen level resolves is counted again at a finer level.
     std::vector<TopNode> top;
     std::vector<std::uint32_t> chunkNodes; // top-node index of each chunk, in Morton order
-    top.emplace_back();
-    top[0].cell = root;
-    Status selectStatus = Status::ok();
-    auto select = [&](auto&& self, std::uint32_t index) -> void {
-        const TopNode node = {top[index].cell, top[index].level, top[index].octant, top[index].key, 0, 0, -1, {}};
-        const std::uint64_t count = counts[static_cast<std::size_t>(node.level)][node.key];
-        if (count <= mChunkTriangles) {
-            top[index].chunk = static_cast<std::int64_t>(chunkNodes.size());
-            chunkNodes.push_back(index);
-            return;
-        }
-        if (node.level == countLevel) {
-            selectStatus = Status(
-                    ErrorCode::OutOfBudget,
-                    "a cell of " + std::to_string(count) + " triangles at octree level " + std::to_string(node.level) +
-                            " does not fit the per-chunk budget of " + std::to_string(mChunkTriangles) +
-                            " triangles; raise --memory-budget");
-            return;
-        }
-        std::vector<int> octants;
-        for (int o = 0; o < 8; ++o)
-            if (counts[static_cast<std::size_t>(node.level + 1)].count((node.key << 3) | static_cast<std::uint64_t>(o)))
-                octants.push_back(o);
-        const auto first = static_cast<std::uint32_t>(top.size());
-        top[index].firstChild = first;
-        top[index].childCount = static_cast<std::uint32_t>(octants.size());
-        for (int o : octants) {
-            TopNode child;
-            child.cell = node.cell.octantCell(o);
-            child.level = node.level + 1;
-            child.octant = o;
-            child.key = (node.key << 3) | static_cast<std::uint64_t>(o);
-            top.push_back(std::move(child));
-        }
-        for (std::uint32_t c = 0; c < octants.size() && selectStatus.isOk(); ++c)
-            self(self, first + c);
-    };
-    select(select, 0);
-    FF_RETURN_IF_ERROR(selectStatus);
-    counts.clear();
+    int countLevel = chooseCountLevel(triangles.count(), mChunkTriangles);
+    while (true) {
+        std::vector<std::unordered_map<std::uint64_t, std::uint64_t>> counts(static_cast<std::size_t>(countLevel + 1));
+        FF_RETURN_IF_ERROR(triangles.forEachBatch(1u << 15, [&](std::span<const storage::PackedTriangle> batch) {
+            for (const storage::PackedTriangle& t : batch) {
+                const float size = extent(t);
+                float cellSize = root.size;
+                int stop = 0;
+                while (stop < countLevel && !(size > mParams.largeTriangleTolerance * cellSize)) {
+                    cellSize *= 0.5f;
+                    ++stop;
+                }
+                const std::uint64_t key = cellKey(root, centroid(t), countLevel) >> (3 * (countLevel - stop));
+                ++counts[static_cast<std::size_t>(stop)][key];
+            }
+            return Status::ok();
+        }));
+        for (int l = countLevel - 1; l >= 0; --l)
+            for (const auto& [key, count] : counts[static_cast<std::size_t>(l + 1)])
+                counts[static_cast<std::size_t>(l)][key >> 3] += count;
+
+        // ---- select chunks top-down: the largest cells that fit -----------------------------
+        top.clear();
+        chunkNodes.clear();
+        top.emplace_back();
+        top[0].cell = root;
+        Status selectStatus = Status::ok();
+        auto select = [&](auto&& self, std::uint32_t index) -> void {
+            const TopNode node = {top[index].cell, top[index].level, top[index].octant, top[index].key, 0, 0, -1, {}};
+            const std::uint64_t count = counts[static_cast<std::size_t>(node.level)][node.key];
+            if (count <= mChunkTriangles) {
+                top[index].chunk = static_cast<std::int64_t>(chunkNodes.size());
+                chunkNodes.push_back(index);
+                return;
+            }
+            if (node.level == countLevel) {
+                selectStatus = Status(
+                        ErrorCode::OutOfBudget,
+                        "a cell of " + std::to_string(count) + " triangles at octree level " + std::to_string(node.level) +
+                                " does not fit the per-chunk budget of " + std::to_string(mChunkTriangles) +
+                                " triangles; raise --memory-budget");
+                return;
+            }
+            std::vector<int> octants;
+            for (int o = 0; o < 8; ++o)
+                if (counts[static_cast<std::size_t>(node.level + 1)].count((node.key << 3) | static_cast<std::uint64_t>(o)))
+                    octants.push_back(o);
+            const auto first = static_cast<std::uint32_t>(top.size());
+            top[index].firstChild = first;
+            top[index].childCount = static_cast<std::uint32_t>(octants.size());
+            for (int o : octants) {
+                TopNode child;
+                child.cell = node.cell.octantCell(o);
+                child.level = node.level + 1;
+                child.octant = o;
+                child.key = (node.key << 3) | static_cast<std::uint64_t>(o);
+                top.push_back(std::move(child));
+            }
+            for (std::uint32_t c = 0; c < octants.size() && selectStatus.isOk(); ++c)
+                self(self, first + c);
+        };
+        select(select, 0);
+        if (selectStatus.isOk())
+            break;
+        if (countLevel == kMaxCountLevel)
+            return selectStatus;
+        countLevel = std::min(countLevel + 3, kMaxCountLevel);
+    }
 
     // ---- distribute: each triangle to its chunk's run file, or to the top cell it stops at --
     std::vector<RunFile> chunkFiles;
@@ -231,14 +252,17 @@ Result<PrototypeBuildResult> PrototypeBuilder::buildChunked(
             std::uint32_t index = 0;
             while (true) {
                 TopNode& node = top[index];
+                // A chunk takes every triangle that reaches it: its own octree keeps the ones
+                // wider than its cell at its root. (Kept here, they would hang off a node that
+                // is written from the chunk's record, and be lost.)
+                if (node.chunk >= 0) {
+                    FF_RETURN_IF_ERROR(chunkFiles[static_cast<std::size_t>(node.chunk)].append(std::span(&t, 1)));
+                    break;
+                }
                 if (size > mParams.largeTriangleTolerance * node.cell.size) {
                     node.own.push_back(t);
                     if (++topTriangles > mChunkTriangles)
                         return Status(ErrorCode::OutOfBudget, "too many large triangles above the chunk level; raise --memory-budget");
-                    break;
-                }
-                if (node.chunk >= 0) {
-                    FF_RETURN_IF_ERROR(chunkFiles[static_cast<std::size_t>(node.chunk)].append(std::span(&t, 1)));
                     break;
                 }
                 const auto octant = static_cast<int>((key >> (3 * (countLevel - node.level - 1))) & 7u);
@@ -252,8 +276,7 @@ Result<PrototypeBuildResult> PrototypeBuilder::buildChunked(
         }
         return Status::ok();
     }));
-    spillBytes += triangles.bytesWritten();
-    triangles.remove();
+    triangles.remove(); // its bytes were counted by the caller
     for (RunFile& file : chunkFiles) {
         FF_RETURN_IF_ERROR(file.flush());
         spillBytes += file.bytesWritten();

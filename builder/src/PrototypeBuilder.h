@@ -58,6 +58,8 @@ public:
             unsigned threads,
             std::filesystem::path tempDirectory);
 
+    /** Builds and writes the prototype in `triangles` (consumed). Adds the bytes of the chunk
+     *  files it writes to `spillBytes`; the run file itself is the caller's to count. */
     [[nodiscard]] Result<PrototypeBuildResult> build(
             std::uint32_t prototypeId,
             RunFile& triangles,

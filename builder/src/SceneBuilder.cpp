@@ -9,12 +9,14 @@
 #include <nlohmann/json.hpp>
 
 #include <algorithm>
+#include <cerrno>
 #include <chrono>
 #include <cmath>
 #include <fstream>
 #include <limits>
 #include <string>
 #include <thread>
+#include <stdlib.h> // mkdtemp
 #include <unistd.h>
 
 namespace ff::builder {
@@ -71,6 +73,22 @@ struct SceneBuilder::Impl {
     Clock::time_point scanStart = Clock::now();
     bool finished = false;
 
+    Impl() = default;
+    Impl(const Impl&) = delete;
+    Impl& operator=(const Impl&) = delete;
+    /** Whatever happened (finish() failed or was never called), no temporary file survives. */
+    ~Impl() { removeTemporaryFiles(); }
+
+    void removeTemporaryFiles() noexcept {
+        prototypes.clear(); // run files unlink themselves
+        writer.reset();     // an uncommitted writer removes its temporary output
+        if (!tempDirectory.empty()) {
+            std::error_code ec;
+            std::filesystem::remove_all(tempDirectory, ec);
+            tempDirectory.clear();
+        }
+    }
+
     Status spill(PrototypeState& proto, std::span<const storage::PackedTriangle> triangles);
     void progress(const char* phase, std::uint64_t done, std::uint64_t total) const {
         if (options.progress)
@@ -104,11 +122,16 @@ Result<std::unique_ptr<SceneBuilder>> SceneBuilder::create(
     if (parent.empty())
         parent = ".";
     const std::filesystem::path tempRoot = options.tempDirectory.empty() ? parent : options.tempDirectory;
-    impl->tempDirectory = tempRoot / (".farfield-build-" + std::to_string(::getpid()));
     std::error_code ec;
-    std::filesystem::create_directories(impl->tempDirectory, ec);
+    std::filesystem::create_directories(tempRoot, ec);
     if (ec)
-        return Status(ErrorCode::IoError, "cannot create temporary directory " + impl->tempDirectory.string() + ": " + ec.message());
+        return Status(ErrorCode::IoError, "cannot create directory " + tempRoot.string() + ": " + ec.message());
+    // A fresh directory per builder: builders sharing an output directory, in one process or
+    // several, must not share run files. From here on ~Impl removes it on every path.
+    std::string pattern = (tempRoot / ".farfield-build-XXXXXX").string();
+    if (::mkdtemp(pattern.data()) == nullptr)
+        return ioStatus(errno, "cannot create temporary directory in", tempRoot);
+    impl->tempDirectory = pattern;
     storage::SceneWriterOptions writerOptions;
     writerOptions.pageSize = options.pageSize;
     FF_ASSIGN_OR_RETURN(impl->writer, storage::SceneWriter::create(outputPath, writerOptions));
@@ -197,38 +220,41 @@ Result<BuildReport> SceneBuilder::finish() {
         return Clock::now();
     };
     Clock::time_point start = phaseEnd("scan", s.scanStart);
-    auto cleanup = [&s]() {
-        s.prototypes.clear();
-        std::error_code ec;
-        std::filesystem::remove_all(s.tempDirectory, ec);
-    };
+    // "Temporary files are removed either way", as soon as finish() returns.
     struct CleanupGuard {
-        decltype(cleanup)& fn;
-        ~CleanupGuard() { fn(); }
-    } guard{cleanup};
+        Impl& impl;
+        ~CleanupGuard() { impl.removeTemporaryFiles(); }
+    } guard{s};
 
     // ---- partition + buildHierarchy, one prototype at a time ---------------------------------
     const std::uint64_t fixedReserve = std::min<std::uint64_t>(s.options.memoryBudgetBytes / 4, 64ull << 20);
     const std::uint64_t chunkBudget = (s.options.memoryBudgetBytes - fixedReserve) / s.options.threads;
     const std::uint64_t chunkTriangles = chunkBudget / kChunkBytesPerTriangle;
     PrototypeBuilder protoBuilder(*s.writer, s.options.hierarchy, chunkTriangles, s.options.threads, s.tempDirectory);
-    std::vector<storage::PrototypeRecord> protoRecords(s.prototypes.size());
-    std::vector<PrototypeSummary> summaries(s.prototypes.size());
-    std::vector<bool> empty(s.prototypes.size(), false);
+    // Prototypes left without triangles get no record (a record needs a root node): the table
+    // holds the others in declaration order, and storedIndex maps declared ids to it.
+    constexpr std::uint32_t kNotStored = std::numeric_limits<std::uint32_t>::max();
+    std::vector<std::uint32_t> storedIndex(s.prototypes.size(), kNotStored);
+    std::vector<storage::PrototypeRecord> protoRecords;
+    std::vector<PrototypeSummary> summaries;
+    nlohmann::json names = nlohmann::json::array(); // per stored prototype
     for (std::size_t p = 0; p < s.prototypes.size(); ++p) {
         s.progress("hierarchy", p, s.prototypes.size());
         PrototypeState& proto = *s.prototypes[p];
         if (proto.run.count() == 0) {
-            empty[p] = true;
             ++report.emptyPrototypes;
             continue;
         }
+        // Building reads the run file back from disk: all of it counts as spilled.
+        FF_RETURN_IF_ERROR(proto.run.flush());
         report.spillBytes += proto.run.bytesWritten();
         FF_ASSIGN_OR_RETURN(
                 PrototypeBuildResult built,
                 protoBuilder.build(static_cast<std::uint32_t>(p), proto.run, proto.boundsMin, proto.boundsMax, report.spillBytes));
-        protoRecords[p] = built.record;
-        summaries[p] = std::move(built.summary);
+        storedIndex[p] = static_cast<std::uint32_t>(protoRecords.size());
+        protoRecords.push_back(built.record);
+        summaries.push_back(std::move(built.summary));
+        names.push_back(proto.name);
         report.storedTriangles += built.record.triangleCount;
         report.nodes += built.nodes;
         report.maxDepth = std::max(report.maxDepth, built.maxDepth);
@@ -244,13 +270,14 @@ Result<BuildReport> SceneBuilder::finish() {
     std::vector<storage::InstanceRecord> instanceRecords;
     instanceRecords.reserve(s.instances.size());
     for (const auto& [prototype, transform] : s.instances) {
-        if (empty[prototype])
+        const std::uint32_t stored = storedIndex[prototype];
+        if (stored == kNotStored)
             continue;
         storage::InstanceRecord record{};
         record.transform = toRowMajor3x4(transform);
-        record.prototype = prototype;
+        record.prototype = stored;
         instanceRecords.push_back(record);
-        report.instancedTriangles += protoRecords[prototype].triangleCount;
+        report.instancedTriangles += protoRecords[stored].triangleCount;
     }
     report.instances = instanceRecords.size();
     s.progress("instances", 0, 1);
@@ -278,12 +305,13 @@ Result<BuildReport> SceneBuilder::finish() {
     nlohmann::json metadata = nlohmann::json::parse(s.options.metadataJson, nullptr, false);
     if (!metadata.is_object())
         metadata = nlohmann::json::object();
-    nlohmann::json names = nlohmann::json::array();
-    for (const auto& proto : s.prototypes)
-        names.push_back(proto ? proto->name : std::string());
     metadata["prototypeNames"] = names;
-    report.peakRssBytes = peakRssBytes();
-    metadata["build"] = nlohmann::json::parse(buildReportJson(report));
+    // The same input must give the same bytes (DESIGN.md "deterministic output"): the report
+    // stored in the file leaves out timings and memory use; the returned report has them.
+    nlohmann::json build = nlohmann::json::parse(buildReportJson(report));
+    for (const char* machineDependent : {"seconds", "total_seconds", "peak_rss_bytes"})
+        build.erase(machineDependent);
+    metadata["build"] = std::move(build);
     const std::string metadataText = metadata.dump();
     FF_ASSIGN_OR_RETURN(
             storage::SectionEntry metadataSection,

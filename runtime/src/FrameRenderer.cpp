@@ -4,14 +4,26 @@
 
 namespace ff::runtime {
 
-FrameRenderer::FrameRenderer(const storage::SceneFile& scene, std::unique_ptr<Renderer> renderer)
-    : mSelection(scene)
-    , mRenderer(std::move(renderer)) {}
+FrameRenderer::FrameRenderer(
+        const storage::SceneFile& scene, std::unique_ptr<IPageAccess> ownedPages, IPageAccess& pages)
+    : mOwnedPages(std::move(ownedPages))
+    , mPages(pages)
+    , mSelection(scene, pages) {}
 
 Result<std::unique_ptr<FrameRenderer>> FrameRenderer::create(
         const storage::SceneFile& scene, const RendererOptions& options) {
-    FF_ASSIGN_OR_RETURN(std::unique_ptr<Renderer> renderer, Renderer::create(scene, options));
-    return std::unique_ptr<FrameRenderer>(new FrameRenderer(scene, std::move(renderer)));
+    auto pages = std::make_unique<MappedPageAccess>(scene);
+    IPageAccess& access = *pages;
+    std::unique_ptr<FrameRenderer> frameRenderer(new FrameRenderer(scene, std::move(pages), access));
+    FF_ASSIGN_OR_RETURN(frameRenderer->mRenderer, Renderer::create(scene, access, options));
+    return frameRenderer;
+}
+
+Result<std::unique_ptr<FrameRenderer>> FrameRenderer::create(
+        const storage::SceneFile& scene, IPageAccess& pages, const RendererOptions& options) {
+    std::unique_ptr<FrameRenderer> frameRenderer(new FrameRenderer(scene, nullptr, pages));
+    FF_ASSIGN_OR_RETURN(frameRenderer->mRenderer, Renderer::create(scene, pages, options));
+    return frameRenderer;
 }
 
 Result<Frame> FrameRenderer::render(
@@ -23,9 +35,11 @@ Result<Frame> FrameRenderer::render(
     selection.viewportWidth = static_cast<float>(width);
     selection.viewportHeight = static_cast<float>(height);
     const auto start = Clock::now();
+    mPages.beginFrame();
     FF_RETURN_IF_ERROR(mSelection.select(camera, selection, mDrawList, frame.stats));
     frame.stats.selectMs = std::chrono::duration<double, std::milli>(Clock::now() - start).count();
     FF_ASSIGN_OR_RETURN(frame.image, mRenderer->render(mDrawList, camera, width, height, supersample, frame.stats));
+    mPages.endFrame();
     frame.stats.totalMs = frame.stats.selectMs + frame.stats.drawMs;
     return frame;
 }

@@ -15,6 +15,8 @@ std::string FrameStats::toJson() const {
             {"triangles_drawn", trianglesDrawn},
             {"geometry_draws", geometryDraws},
             {"pages_uploaded", pagesUploaded},
+            {"nodes_deferred", nodesDeferred},
+            {"pages_missing", pagesMissing},
             {"select_ms", selectMs},
             {"draw_ms", drawMs},
             {"total_ms", totalMs},

@@ -1,3 +1,7 @@
+// Chamberlain, DeRose, Lischinski, Salesin, Snyder: "Fast Rendering of Complex Environments
+// Using a Spatial Hierarchy", GI '96, §3 (the traversal), extended with instancing and with
+// streaming (DESIGN.md "Runtime rules": never wait for I/O in a frame).
+
 #include <ff/runtime/Selection.h>
 
 #include <algorithm>
@@ -17,10 +21,18 @@ glm::mat4 instanceTransform(const storage::InstanceRecord& instance) {
     return m;
 }
 
+bool isCell(const storage::NodeRecord& node) {
+    return node.kind == static_cast<std::uint8_t>(storage::NodeKind::Cell);
+}
+
+// Priorities for pages nobody can see the size of yet (the root, a full draw).
+constexpr float kTopPriority = 1e30f;
+
 } // namespace
 
-Selection::Selection(const storage::SceneFile& scene)
+Selection::Selection(const storage::SceneFile& scene, IPageAccess& pages)
     : mScene(scene)
+    , mPages(pages)
     , mPrototypeGeometry(scene.prototypes().size())
     , mPrototypeGeometryReady(scene.prototypes().size(), false) {}
 
@@ -35,25 +47,159 @@ std::uint32_t Selection::pushTransform(const glm::mat4& transform) {
     return index;
 }
 
+void Selection::reportFailure(const Status& failure) {
+    // Corrupt messages start with "page N: ", so equal messages are the same page's failure.
+    if (mReported.insert(failure.message()).second)
+        mNewFailures.push_back(failure);
+}
+
+Selection::Fetch Selection::fetch(
+        std::uint64_t page, storage::PageType type, float priority, std::span<const std::byte>& payload) {
+    const PageLookup lookup = mPages.lookup(page, type, priority);
+    if (lookup.availability == PageAvailability::Ready) {
+        payload = lookup.payload;
+        return Fetch::Ready;
+    }
+    ++mStats->pagesMissing;
+    if (lookup.availability == PageAvailability::Failed && lookup.failure)
+        reportFailure(*lookup.failure);
+    return Fetch::Missing;
+}
+
+Selection::Fetch Selection::readNode(storage::NodeRef ref, float priority, storage::NodeRecord& out) {
+    std::span<const std::byte> payload;
+    if (fetch(ref.page, storage::PageType::Nodes, priority, payload) != Fetch::Ready)
+        return Fetch::Missing;
+    Result<storage::NodeRecord> node = mScene.decodeNode(payload, ref);
+    if (!node) {
+        reportFailure(node.status());
+        return Fetch::Missing;
+    }
+    out = *node;
+    return Fetch::Ready;
+}
+
+Selection::Fetch Selection::collectGeometry(const storage::NodeRecord& node, float priority) {
+    mSegments.clear();
+    if (node.geometryCount == 0 || !isCell(node))
+        return Fetch::Ready;
+    if (Status status = mScene.geometrySegments(node, mSegments); !status) {
+        reportFailure(status);
+        return Fetch::Missing;
+    }
+    // Ask for every page before answering, so all of them are in flight together.
+    Fetch result = Fetch::Ready;
+    for (const storage::GeometrySegment& s : mSegments) {
+        std::span<const std::byte> payload;
+        if (fetch(s.page, storage::PageType::Geometry, priority, payload) != Fetch::Ready)
+            result = Fetch::Missing;
+    }
+    return result;
+}
+
 Status Selection::select(const Camera& camera, const SelectionOptions& options, DrawList& out, FrameStats& stats) {
     mCamera = &camera;
     mOptions = options;
     mOut = &out;
     mStats = &stats;
     mPixelScale = camera.pixelScale(options.viewportHeight);
+    mNewFailures.clear();
     out.clear();
     mTransformScale.clear();
     mFrusta.clear();
     mChildStack.clear();
     pushTransform(glm::mat4(1.0f));
     if (options.method == Method::Full) {
-        FF_RETURN_IF_ERROR(selectFull());
+        selectFull();
     } else {
-        FF_ASSIGN_OR_RETURN(const storage::NodeRecord root, mScene.node(mScene.header().root));
-        FF_RETURN_IF_ERROR(visit(root, 0));
+        storage::NodeRecord root{};
+        if (readNode(mScene.header().root, kTopPriority, root) == Fetch::Ready)
+            visit(root, 0);
+        else if (!mNewFailures.empty())
+            return mNewFailures.front().withContext("the root node is unreadable");
     }
     mergeGeometryDraws();
     return Status::ok();
+}
+
+void Selection::defer(const storage::NodeRecord& node, std::uint32_t transform) {
+    ++mStats->nodesDeferred;
+    if (node.flags & storage::kNodeHasCube)
+        emitCube(node, transform);
+}
+
+void Selection::visit(const storage::NodeRecord& node, std::uint32_t transform) {
+    ++mStats->nodesVisited;
+    if (!mFrusta[transform].intersects(toVec3(node.boundsMin), toVec3(node.boundsMax))) {
+        ++mStats->nodesCulled;
+        return;
+    }
+
+    // ε rule on the cell's bounding sphere, measured at its nearest point to the eye.
+    const glm::vec3 cellMin = toVec3(node.cellMin);
+    const glm::vec3 cellMax = toVec3(node.cellMax);
+    const glm::vec3& localEye = mOut->localEyes[transform];
+    const float scale = mTransformScale[transform];
+    const float radius = 0.5f * glm::length(cellMax - cellMin) * scale;
+    const float distance = glm::length(0.5f * (cellMin + cellMax) - localEye) * scale;
+    float projected = INFINITY;
+    if (mCamera->orthographic)
+        projected = 2.0f * radius * mPixelScale;
+    else if (distance > radius)
+        projected = 2.0f * radius * mPixelScale / (distance - radius);
+    if (projected < mOptions.epsilonPixels && (node.flags & storage::kNodeHasCube)) {
+        emitCube(node, transform);
+        return;
+    }
+    const float priority = std::min(projected, kTopPriority);
+
+    if (!isCell(node)) {
+        const storage::InstanceRecord& instance = mScene.instances()[node.geometryPage];
+        storage::NodeRecord root{};
+        if (readNode(mScene.prototypes()[instance.prototype].root, priority, root) != Fetch::Ready) {
+            defer(node, transform);
+            return;
+        }
+        ++mStats->instancesEntered;
+        visit(root, pushTransform(mOut->transforms[transform] * instanceTransform(instance)));
+        return;
+    }
+
+    // Refining needs the cell's own triangles and its children's page; without either, the
+    // cell's cube stands in for the whole subtree this frame.
+    std::span<const std::byte> childPage;
+    const bool childrenReady = node.childCount == 0 ||
+                               fetch(node.firstChild.page, storage::PageType::Nodes, priority, childPage) == Fetch::Ready;
+    const bool geometryReady = collectGeometry(node, priority) == Fetch::Ready;
+    if (!childrenReady || !geometryReady) {
+        defer(node, transform);
+        return;
+    }
+    for (const storage::GeometrySegment& s : mSegments) {
+        mOut->geometry.push_back({s.page, s.firstSlot, s.count, transform});
+        mStats->trianglesDrawn += s.count;
+    }
+
+    // Children farthest first, so cubes drawn later blend over what lies behind them.
+    const std::size_t base = mChildStack.size();
+    for (std::uint32_t c = 0; c < node.childCount; ++c) {
+        Result<storage::NodeRecord> child = mScene.decodeNode(childPage, storage::SceneFile::childRef(node, c));
+        if (!child) {
+            reportFailure(child.status());
+            mChildStack.resize(base);
+            defer(node, transform);
+            return;
+        }
+        const glm::vec3 d = 0.5f * (toVec3(child->cellMin) + toVec3(child->cellMax)) - localEye;
+        mChildStack.push_back({*child, glm::dot(d, d)});
+    }
+    std::sort(mChildStack.begin() + static_cast<std::ptrdiff_t>(base), mChildStack.end(),
+              [](const ChildEntry& a, const ChildEntry& b) { return a.distance > b.distance; });
+    for (std::size_t i = base; i < base + node.childCount; ++i) {
+        const storage::NodeRecord child = mChildStack[i].record; // the stack may grow below
+        visit(child, transform);
+    }
+    mChildStack.resize(base);
 }
 
 // Opaque geometry is depth-tested, so its order is free: sorted by transform and page, runs that
@@ -82,73 +228,6 @@ void Selection::mergeGeometryDraws() {
     mStats->geometryDraws = out;
 }
 
-Status Selection::visit(const storage::NodeRecord& node, std::uint32_t transform) {
-    ++mStats->nodesVisited;
-    const glm::vec3 boundsMin = toVec3(node.boundsMin);
-    const glm::vec3 boundsMax = toVec3(node.boundsMax);
-    if (!mFrusta[transform].intersects(boundsMin, boundsMax)) {
-        ++mStats->nodesCulled;
-        return Status::ok();
-    }
-
-    // ε rule on the cell's bounding sphere, measured at its nearest point to the eye.
-    const glm::vec3 cellMin = toVec3(node.cellMin);
-    const glm::vec3 cellMax = toVec3(node.cellMax);
-    const glm::vec3& localEye = mOut->localEyes[transform];
-    const float scale = mTransformScale[transform];
-    const float radius = 0.5f * glm::length(cellMax - cellMin) * scale;
-    const float distance = glm::length(0.5f * (cellMin + cellMax) - localEye) * scale;
-    float projected = INFINITY;
-    if (mCamera->orthographic)
-        projected = 2.0f * radius * mPixelScale;
-    else if (distance > radius)
-        projected = 2.0f * radius * mPixelScale / (distance - radius);
-    if (projected < mOptions.epsilonPixels && (node.flags & storage::kNodeHasCube)) {
-        emitCube(node, transform);
-        return Status::ok();
-    }
-
-    if (node.kind == static_cast<std::uint8_t>(storage::NodeKind::Instance)) {
-        const storage::InstanceRecord& instance = mScene.instances()[node.geometryPage];
-        const storage::PrototypeRecord& prototype = mScene.prototypes()[instance.prototype];
-        FF_ASSIGN_OR_RETURN(const storage::NodeRecord root, mScene.node(prototype.root));
-        ++mStats->instancesEntered;
-        const std::uint32_t local = pushTransform(mOut->transforms[transform] * instanceTransform(instance));
-        return visit(root, local);
-    }
-
-    FF_RETURN_IF_ERROR(emitGeometry(node, transform));
-
-    // Children farthest first, so cubes drawn later blend over what lies behind them.
-    const std::size_t base = mChildStack.size();
-    for (std::uint32_t c = 0; c < node.childCount; ++c) {
-        FF_ASSIGN_OR_RETURN(const storage::NodeRecord child, mScene.child(node, c));
-        const glm::vec3 center = 0.5f * (toVec3(child.cellMin) + toVec3(child.cellMax));
-        const glm::vec3 d = center - localEye;
-        mChildStack.push_back({child, glm::dot(d, d)});
-    }
-    std::sort(mChildStack.begin() + static_cast<std::ptrdiff_t>(base), mChildStack.end(),
-              [](const ChildEntry& a, const ChildEntry& b) { return a.distance > b.distance; });
-    for (std::size_t i = base; i < base + node.childCount; ++i) {
-        const storage::NodeRecord child = mChildStack[i].record; // the stack may grow below
-        FF_RETURN_IF_ERROR(visit(child, transform));
-    }
-    mChildStack.resize(base);
-    return Status::ok();
-}
-
-Status Selection::emitGeometry(const storage::NodeRecord& node, std::uint32_t transform) {
-    if (node.geometryCount == 0 || node.kind != static_cast<std::uint8_t>(storage::NodeKind::Cell))
-        return Status::ok();
-    mSegments.clear();
-    FF_RETURN_IF_ERROR(mScene.geometrySegments(node, mSegments));
-    for (const storage::GeometrySegment& s : mSegments) {
-        mOut->geometry.push_back({s.page, s.firstSlot, s.count, transform});
-        mStats->trianglesDrawn += s.count;
-    }
-    return Status::ok();
-}
-
 void Selection::emitCube(const storage::NodeRecord& node, std::uint32_t transform) {
     const glm::vec3 boxMin = toVec3(node.cellMin);
     const glm::vec3 boxMax = toVec3(node.cellMax);
@@ -169,52 +248,59 @@ void Selection::emitCube(const storage::NodeRecord& node, std::uint32_t transfor
     mStats->cubeFacesDrawn += faces;
 }
 
-Status Selection::collectPrototypeGeometry(std::uint32_t prototype) {
+// The whole prototype tree, once, merged into per-page runs. Pages that are not Ready yet
+// leave the list incomplete and it is rebuilt on a later frame.
+void Selection::collectPrototypeGeometry(std::uint32_t prototype) {
     std::vector<storage::GeometrySegment>& merged = mPrototypeGeometry[prototype];
+    merged.clear();
+    bool complete = true;
     std::vector<storage::NodeRecord> stack;
-    FF_ASSIGN_OR_RETURN(storage::NodeRecord root, mScene.node(mScene.prototypes()[prototype].root));
+    storage::NodeRecord root{};
+    if (readNode(mScene.prototypes()[prototype].root, kTopPriority, root) != Fetch::Ready)
+        return;
     stack.push_back(root);
-    std::vector<storage::GeometrySegment> segments;
     while (!stack.empty()) {
         const storage::NodeRecord node = stack.back();
         stack.pop_back();
-        segments.clear();
-        if (node.geometryCount > 0)
-            FF_RETURN_IF_ERROR(mScene.geometrySegments(node, segments));
-        merged.insert(merged.end(), segments.begin(), segments.end());
+        if (collectGeometry(node, kTopPriority) != Fetch::Ready)
+            complete = false;
+        else
+            merged.insert(merged.end(), mSegments.begin(), mSegments.end());
         for (std::uint32_t c = 0; c < node.childCount; ++c) {
-            FF_ASSIGN_OR_RETURN(storage::NodeRecord child, mScene.child(node, c));
-            stack.push_back(child);
+            storage::NodeRecord child{};
+            if (readNode(storage::SceneFile::childRef(node, c), kTopPriority, child) == Fetch::Ready)
+                stack.push_back(child);
+            else
+                complete = false;
         }
     }
-    // Runs that continue one another in a page become one draw.
     std::sort(merged.begin(), merged.end(), [](const auto& a, const auto& b) {
         return a.page != b.page ? a.page < b.page : a.firstSlot < b.firstSlot;
     });
-    std::vector<storage::GeometrySegment> out;
+    std::vector<storage::GeometrySegment> runs;
     for (const storage::GeometrySegment& s : merged) {
-        if (!out.empty() && out.back().page == s.page && out.back().firstSlot + out.back().count == s.firstSlot)
-            out.back().count += s.count;
+        if (!runs.empty() && runs.back().page == s.page && runs.back().firstSlot + runs.back().count == s.firstSlot)
+            runs.back().count += s.count;
         else
-            out.push_back(s);
+            runs.push_back(s);
     }
-    merged = std::move(out);
-    mPrototypeGeometryReady[prototype] = true;
-    return Status::ok();
+    merged = std::move(runs);
+    mPrototypeGeometryReady[prototype] = complete;
 }
 
-Status Selection::selectFull() {
-    const auto& instances = mScene.instances();
-    for (const storage::InstanceRecord& instance : instances) {
+void Selection::selectFull() {
+    for (const storage::InstanceRecord& instance : mScene.instances()) {
         if (!mPrototypeGeometryReady[instance.prototype])
-            FF_RETURN_IF_ERROR(collectPrototypeGeometry(instance.prototype));
+            collectPrototypeGeometry(instance.prototype);
         const std::uint32_t transform = pushTransform(instanceTransform(instance));
         for (const storage::GeometrySegment& s : mPrototypeGeometry[instance.prototype]) {
+            std::span<const std::byte> payload;
+            if (fetch(s.page, storage::PageType::Geometry, kTopPriority, payload) != Fetch::Ready)
+                continue;
             mOut->geometry.push_back({s.page, s.firstSlot, s.count, transform});
             mStats->trianglesDrawn += s.count;
         }
     }
-    return Status::ok();
 }
 
 } // namespace ff::runtime

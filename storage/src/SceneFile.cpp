@@ -482,43 +482,54 @@ Result<NodeRecord> SceneFile::node(NodeRef ref) const {
                 "node slot " + std::to_string(ref.slot) + " out of range (a Nodes page holds " +
                         std::to_string(f.nodesPerPage) + ")");
     FF_ASSIGN_OR_RETURN(std::span<const std::byte> payload, pagePayload(ref.page, PageType::Nodes));
+    return decodeNode(payload, ref);
+}
+
+Result<NodeRecord> SceneFile::decodeNode(std::span<const std::byte> payload, NodeRef ref) const {
+    const Impl& f = *mImpl;
+    if (ref.slot >= f.nodesPerPage || payload.size() < std::size_t{f.nodesPerPage} * sizeof(NodeRecord))
+        return corrupt(
+                ref.page,
+                "node slot " + std::to_string(ref.slot) + " out of range (a Nodes page holds " +
+                        std::to_string(f.nodesPerPage) + ")");
     NodeRecord n{};
     std::memcpy(&n, payload.data() + std::size_t{ref.slot} * sizeof(NodeRecord), sizeof(n));
 
-    const std::string at = "node slot " + std::to_string(ref.slot) + ": ";
+    // Built only on the error path: this runs for every node of every frame.
+    const auto at = [&ref] { return "node slot " + std::to_string(ref.slot) + ": "; };
     if (n.kind != static_cast<std::uint8_t>(NodeKind::Cell) &&
         n.kind != static_cast<std::uint8_t>(NodeKind::Instance))
-        return corrupt(ref.page, at + "unknown node kind " + std::to_string(n.kind));
+        return corrupt(ref.page, at() + "unknown node kind " + std::to_string(n.kind));
     constexpr std::uint8_t kKnownFlags = kNodeHasCube | kNodeOctreeChildren;
     if ((n.flags & ~kKnownFlags) != 0)
-        return corrupt(ref.page, at + "unknown node flags " + hex(n.flags));
+        return corrupt(ref.page, at() + "unknown node flags " + hex(n.flags));
     if (!allFinite(n.cellMin) || !allFinite(n.cellMax) || !allFinite(n.boundsMin) ||
         !allFinite(n.boundsMax))
-        return corrupt(ref.page, at + "non-finite bounds");
+        return corrupt(ref.page, at() + "non-finite bounds");
     if (!ordered(n.cellMin, n.cellMax) || !ordered(n.boundsMin, n.boundsMax))
-        return corrupt(ref.page, at + "bounds with min > max");
+        return corrupt(ref.page, at() + "bounds with min > max");
     if (n.childCount > 0) {
         const NodeRef c = n.firstChild;
         if (c.page == 0 || c.page >= f.pageCount)
             return corrupt(
                     ref.page,
-                    at + "children on page " + std::to_string(c.page) + ", outside the file (" +
+                    at() + "children on page " + std::to_string(c.page) + ", outside the file (" +
                             std::to_string(f.pageCount) + " pages)");
         if (c.slot >= f.nodesPerPage || n.childCount > f.nodesPerPage - c.slot)
             return corrupt(
                     ref.page,
-                    at + "children in slots [" + std::to_string(c.slot) + ", " +
+                    at() + "children in slots [" + std::to_string(c.slot) + ", " +
                             std::to_string(std::uint64_t{c.slot} + n.childCount) +
                             ") cross the end of Nodes page " + std::to_string(c.page) + " (" +
                             std::to_string(f.nodesPerPage) + " slots)");
     }
     if (n.kind == static_cast<std::uint8_t>(NodeKind::Cell)) {
         if (std::string problem = f.geometryRunProblem(n); !problem.empty())
-            return corrupt(ref.page, at + problem);
+            return corrupt(ref.page, at() + problem);
     } else if (n.geometryPage >= f.instances.size()) {
         return corrupt(
                 ref.page,
-                at + "instance index " + std::to_string(n.geometryPage) +
+                at() + "instance index " + std::to_string(n.geometryPage) +
                         " out of range (the file has " + std::to_string(f.instances.size()) +
                         " instances)");
     }

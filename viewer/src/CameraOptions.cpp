@@ -6,6 +6,8 @@
 
 #include <charconv>
 #include <cmath>
+#include <fstream>
+#include <sstream>
 
 namespace ff::viewer {
 
@@ -18,6 +20,54 @@ void CameraOptions::addTo(CLI::App& app) {
     app.add_option("--distance", distance, "Orbit camera: distance from the centre in scene radii")->capture_default_str();
     app.add_option("--azimuth", azimuth, "Orbit camera: degrees about +Y, from +Z")->capture_default_str();
     app.add_option("--elevation", elevation, "Orbit camera: degrees above the horizon")->capture_default_str();
+    app.add_option("--path", path, "Camera path JSON (farfield path ...); its frame --path-frame");
+    app.add_option("--path-frame", pathFrame, "Frame of --path to use, from 0 (default 0)");
+}
+
+Result<std::vector<StoredCamera>> storedCameras(const storage::SceneFile& scene) {
+    const nlohmann::json metadata = nlohmann::json::parse(scene.metadataJson(), nullptr, false);
+    if (!metadata.is_object() || !metadata.contains("cameras"))
+        return std::vector<StoredCamera>();
+    const nlohmann::json& cameras = metadata["cameras"];
+    if (!cameras.is_array())
+        return Status(ErrorCode::Corrupt, "the scene metadata's \"cameras\" is not an array");
+    std::vector<StoredCamera> result;
+    for (std::size_t index = 0; index < cameras.size(); ++index) {
+        const nlohmann::json& c = cameras[index];
+        try {
+            const auto v = [&c](const char* key) {
+                const auto a = c.at(key);
+                return glm::vec3(a.at(0).get<float>(), a.at(1).get<float>(), a.at(2).get<float>());
+            };
+            StoredCamera camera;
+            camera.name = c.value("name", std::string());
+            camera.perspective = c.value("perspective", true);
+            camera.eye = v("eye");
+            camera.forward = v("forward");
+            camera.up = v("up");
+            if (c.contains("yfov"))
+                camera.yfovRadians = c.at("yfov").get<float>();
+            camera.ymag = c.value("ymag", 1.0f);
+            result.push_back(std::move(camera));
+        } catch (const nlohmann::json::exception& e) {
+            return Status(ErrorCode::Corrupt, "camera " + std::to_string(index) + " in the scene metadata: " + e.what());
+        }
+    }
+    return result;
+}
+
+Result<runtime::CameraPath> readCameraPath(const std::string& file) {
+    std::ifstream in(file, std::ios::binary);
+    if (!in)
+        return Status(ErrorCode::NotFound, file + ": cannot open the camera path");
+    std::ostringstream text;
+    text << in.rdbuf();
+    if (in.bad())
+        return Status(ErrorCode::IoError, file + ": cannot read the camera path");
+    auto path = runtime::CameraPath::fromJson(text.str());
+    if (!path)
+        return path.status().withContext(file);
+    return path;
 }
 
 runtime::Bounds sceneBounds(const storage::SceneFile& scene) {
@@ -30,6 +80,21 @@ Result<runtime::Camera> CameraOptions::resolve(const storage::SceneFile& scene) 
     if (!(fovDegrees > 0.0f && fovDegrees < 179.0f))
         return Status(ErrorCode::InvalidArgument, "--fov must be between 0 and 179 degrees");
     const float fov = glm::radians(fovDegrees);
+    if (!path.empty()) {
+        if (!camera.empty() || !eye.empty() || !target.empty())
+            return Status(ErrorCode::InvalidArgument, "--path does not go with --camera, --eye or --target");
+        FF_ASSIGN_OR_RETURN(const runtime::CameraPath cameraPath, readCameraPath(path));
+        const std::int64_t frame = std::max<std::int64_t>(pathFrame, 0);
+        if (frame >= cameraPath.frameCount())
+            return Status(ErrorCode::InvalidArgument, "--path-frame " + std::to_string(frame) + ": " + path + " has " +
+                                                              std::to_string(cameraPath.frameCount()) + " frames (0 to " +
+                                                              std::to_string(cameraPath.frameCount() - 1) + ")");
+        runtime::Camera result = cameraPath.sample(cameraPath.frameTime(frame));
+        result.fitClipPlanes(bounds);
+        return result;
+    }
+    if (pathFrame >= 0)
+        return Status(ErrorCode::InvalidArgument, "--path-frame needs --path");
     if (!camera.empty()) {
         if (camera.rfind("gltf:", 0) != 0)
             return Status(ErrorCode::InvalidArgument, "--camera must look like gltf:0");
@@ -38,28 +103,16 @@ Result<runtime::Camera> CameraOptions::resolve(const storage::SceneFile& scene) 
         const auto [end, error] = std::from_chars(number.data(), number.data() + number.size(), index);
         if (error != std::errc() || end != number.data() + number.size() || index < 0)
             return Status(ErrorCode::InvalidArgument, "--camera " + camera + ": expected gltf:<index>");
-        const nlohmann::json metadata = nlohmann::json::parse(scene.metadataJson(), nullptr, false);
-        const nlohmann::json cameras = metadata.is_object() ? metadata.value("cameras", nlohmann::json::array())
-                                                            : nlohmann::json::array();
-        if (!cameras.is_array() || static_cast<std::size_t>(index) >= cameras.size())
+        FF_ASSIGN_OR_RETURN(const std::vector<StoredCamera> cameras, storedCameras(scene));
+        if (static_cast<std::size_t>(index) >= cameras.size())
             return Status(ErrorCode::NotFound, "--camera " + camera + ": the scene has " +
-                                                       std::to_string(cameras.is_array() ? cameras.size() : 0) +
-                                                       " glTF camera(s)");
-        const nlohmann::json& c = cameras[static_cast<std::size_t>(index)];
-        try {
-            const auto v = [&c](const char* key) {
-                const auto a = c.at(key);
-                return glm::vec3(a.at(0).get<float>(), a.at(1).get<float>(), a.at(2).get<float>());
-            };
-            runtime::Camera result = runtime::Camera::lookAt(v("eye"), v("eye") + v("forward"), v("up"),
-                                                             c.value("yfov", fov));
-            result.orthographic = !c.value("perspective", true);
-            result.orthoHalfHeight = c.value("ymag", 1.0f);
-            result.fitClipPlanes(bounds);
-            return result;
-        } catch (const nlohmann::json::exception& e) {
-            return Status(ErrorCode::Corrupt, "camera " + std::to_string(index) + " in the scene metadata: " + e.what());
-        }
+                                                       std::to_string(cameras.size()) + " glTF camera(s)");
+        const StoredCamera& c = cameras[static_cast<std::size_t>(index)];
+        runtime::Camera result = runtime::Camera::lookAt(c.eye, c.eye + c.forward, c.up, c.yfovRadians.value_or(fov));
+        result.orthographic = !c.perspective;
+        result.orthoHalfHeight = c.ymag;
+        result.fitClipPlanes(bounds);
+        return result;
     }
     if (!eye.empty() || !target.empty()) {
         if (eye.empty() || target.empty())

@@ -1,13 +1,16 @@
 #pragma once
 
 #include <ff/runtime/Camera.h>
+#include <ff/runtime/CameraPath.h>
 #include <ff/storage/SceneFile.h>
 #include <ff/storage/Status.h>
 
 #include <CLI/CLI.hpp>
 
+#include <cstdint>
 #include <optional>
 #include <string>
+#include <vector>
 
 namespace ff::viewer {
 
@@ -21,13 +24,33 @@ struct CameraOptions {
     float distance = 3.0f;   ///< in scene radii
     float azimuth = 30.0f;   ///< degrees about +Y from +Z
     float elevation = 20.0f; ///< degrees
+    std::string path;        ///< camera path JSON (docs/camera-paths.md)
+    std::int64_t pathFrame = -1; ///< frame of `path`; -1 = not given (frame 0)
 
     void addTo(CLI::App& app);
-    /** Resolves the flags against the scene (bounds, stored glTF cameras). */
+    /** Resolves the flags against the scene (bounds, stored glTF cameras, camera path). */
     [[nodiscard]] Result<runtime::Camera> resolve(const storage::SceneFile& scene) const;
 };
 
 /** World bounds of a scene file. */
 runtime::Bounds sceneBounds(const storage::SceneFile& scene);
+
+/** A camera of the source glTF, as the builder stored it in the scene's metadata ("cameras"). */
+struct StoredCamera {
+    std::string name;
+    bool perspective = true;
+    glm::vec3 eye{0.0f};
+    glm::vec3 forward{0.0f, 0.0f, -1.0f}; ///< unit
+    glm::vec3 up{0.0f, 1.0f, 0.0f};       ///< unit
+    std::optional<float> yfovRadians;     ///< perspective only
+    float ymag = 1.0f;                    ///< orthographic half height
+};
+
+/** The scene's stored glTF cameras in glTF order; empty if it has none (e.g. generated scenes).
+ *  Corrupt if an entry is malformed. */
+[[nodiscard]] Result<std::vector<StoredCamera>> storedCameras(const storage::SceneFile& scene);
+
+/** Reads and validates a camera path file; errors name the file. */
+[[nodiscard]] Result<runtime::CameraPath> readCameraPath(const std::string& file);
 
 } // namespace ff::viewer

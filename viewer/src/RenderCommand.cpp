@@ -13,6 +13,7 @@
 #include <fstream>
 #include <memory>
 #include <string>
+#include <vector>
 
 namespace ff::viewer {
 
@@ -71,10 +72,13 @@ int runRender(const RenderArgs& args) {
     selection.epsilonPixels = args.epsilon;
     nlohmann::json frames = nlohmann::json::array();
     Result<runtime::Frame> frame = Status(ErrorCode::Internal, "no frame rendered");
+    std::vector<Status> failures;
     for (int f = 0; f < args.frames; ++f) {
         frame = (*renderer)->render(*camera, selection, size->x, size->y, args.supersample);
         if (!frame)
             return reportError("render", frame.status().withContext(args.scene));
+        const auto& fresh = (*renderer)->newFailures();
+        failures.insert(failures.end(), fresh.begin(), fresh.end());
         nlohmann::json stats = nlohmann::json::parse(frame->stats.toJson());
         stats["frame"] = f;
         std::printf("%s\n", stats.dump().c_str());
@@ -97,7 +101,11 @@ int runRender(const RenderArgs& args) {
         if (!file)
             return reportError("render", Status(ErrorCode::IoError, "cannot write " + args.stats));
     }
-    return 0;
+    // Unreadable pages were drawn with their ancestors' cubes; the image exists, but the file
+    // is damaged and the exit status says so.
+    for (const Status& failure : failures)
+        reportError("render", failure.withContext(args.scene));
+    return failures.empty() ? 0 : 1;
 }
 
 } // namespace

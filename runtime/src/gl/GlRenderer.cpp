@@ -88,6 +88,7 @@ void ensureCapacity(GLuint buffer, GLsizeiptr& capacity, GLsizeiptr bytes) {
 
 struct Renderer::Impl {
     const storage::SceneFile* scene = nullptr;
+    IPageAccess* pages = nullptr;
     RendererOptions options;
     GLuint geometryProgram = 0;
     GLuint cubeProgram = 0;
@@ -138,9 +139,11 @@ Renderer::Impl::~Impl() {
 Renderer::Renderer(std::unique_ptr<Impl> impl) : mImpl(std::move(impl)) {}
 Renderer::~Renderer() = default;
 
-Result<std::unique_ptr<Renderer>> Renderer::create(const storage::SceneFile& scene, const RendererOptions& options) {
+Result<std::unique_ptr<Renderer>> Renderer::create(
+        const storage::SceneFile& scene, IPageAccess& pages, const RendererOptions& options) {
     auto impl = std::make_unique<Impl>();
     impl->scene = &scene;
+    impl->pages = &pages;
     impl->options = options;
     FF_ASSIGN_OR_RETURN(impl->geometryProgram, linkProgram(gl::kGeometryVertexShader, gl::kGeometryFragmentShader));
     FF_ASSIGN_OR_RETURN(impl->cubeProgram, linkProgram(gl::kCubeVertexShader, gl::kCubeFragmentShader));
@@ -247,7 +250,11 @@ Result<std::uint32_t> Renderer::Impl::residentSlot(std::uint64_t page, FrameStat
         lru.erase(*victim);
         freeSlots.push_back(slot);
     }
-    FF_ASSIGN_OR_RETURN(const std::span<const std::byte> payload, scene->pagePayload(page, storage::PageType::Geometry));
+    // Selection only lists pages it found Ready this frame, so this lookup finds them too.
+    const PageLookup lookup = pages->lookup(page, storage::PageType::Geometry, 0.0f);
+    if (lookup.availability != PageAvailability::Ready)
+        return lookup.failure ? *lookup.failure : Status(ErrorCode::Internal, "page " + std::to_string(page) + " vanished");
+    const std::span<const std::byte> payload = lookup.payload;
     const std::uint32_t slot = freeSlots.back();
     freeSlots.pop_back();
     bufferSubData(arena, static_cast<GLintptr>(slot) * slotBytes, slotBytes, payload.data());
@@ -306,7 +313,7 @@ void Renderer::Impl::drawCubes(const DrawList& list, const glm::mat4& viewProjec
     glEnable(GL_BLEND);
     glBlendFunc(GL_ONE, GL_ONE_MINUS_SRC_ALPHA); // premultiplied "over", back to front
     glDepthMask(GL_FALSE);
-    glDrawArraysInstanced(GL_TRIANGLES, 0, 36, static_cast<GLsizei>(list.cubes.size()));
+    glDrawArraysInstanced(GL_TRIANGLES, 0, 18, static_cast<GLsizei>(list.cubes.size()));
     glDepthMask(GL_TRUE);
     glDisable(GL_BLEND);
 }

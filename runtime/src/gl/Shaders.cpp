@@ -55,24 +55,25 @@ out vec4 vColor;
 
 const ivec2 kCorners[6] = ivec2[6](ivec2(0, 0), ivec2(1, 0), ivec2(1, 1), ivec2(0, 0), ivec2(1, 1), ivec2(0, 1));
 
+// 18 vertices per cube: a box shows at most one face per axis, the one on the eye's side, and
+// none on an axis whose slab holds the eye.
 void main() {
-    int face = gl_VertexID / 6;
-    int axis = face / 2;
-    bool plusSide = (face & 1) == 1;
+    int axis = gl_VertexID / 6;
     int u = (axis + 1) % 3;
     int v = (axis + 2) % 3;
+    vec3 eye = localEyes[aTransform].xyz;
+    bool plusSide = eye[axis] > aBoxMax[axis];
+    bool facesViewer = plusSide || eye[axis] < aBoxMin[axis];
+    vColor = aFaces[2 * axis + (plusSide ? 1 : 0)];
+    if (!facesViewer || vColor.a <= 0.0) {
+        gl_Position = vec4(2.0, 2.0, 2.0, 1.0); // outside the clip volume: the face vanishes
+        return;
+    }
     ivec2 corner = kCorners[gl_VertexID % 6];
     vec3 p;
     p[axis] = plusSide ? aBoxMax[axis] : aBoxMin[axis];
     p[u] = corner.x == 1 ? aBoxMax[u] : aBoxMin[u];
     p[v] = corner.y == 1 ? aBoxMax[v] : aBoxMin[v];
-    vec3 eye = localEyes[aTransform].xyz;
-    bool facesViewer = plusSide ? eye[axis] > aBoxMax[axis] : eye[axis] < aBoxMin[axis];
-    vColor = aFaces[face];
-    if (!facesViewer || vColor.a <= 0.0) {
-        gl_Position = vec4(2.0, 2.0, 2.0, 1.0); // outside the clip volume: the face vanishes
-        return;
-    }
     gl_Position = uViewProjection * (transforms[aTransform] * vec4(p, 1.0));
 }
 )";

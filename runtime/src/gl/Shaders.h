@@ -5,7 +5,7 @@ namespace ff::runtime::gl {
 /** Geometry: PackedVertex attributes, per-draw transform index via baseInstance. */
 extern const char* const kGeometryVertexShader;
 extern const char* const kGeometryFragmentShader;
-/** Color cubes: one instance per cube, 36 vertices, hidden faces collapsed. */
+/** Color cubes: one instance per cube, 18 vertices (a face per axis), hidden faces collapsed. */
 extern const char* const kCubeVertexShader;
 extern const char* const kCubeFragmentShader;
 

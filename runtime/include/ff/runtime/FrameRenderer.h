@@ -24,18 +24,26 @@ struct Frame {
  */
 class FrameRenderer {
 public:
+    /** Every page resident through the memory map (synchronous: frames are always complete). */
     [[nodiscard]] static Result<std::unique_ptr<FrameRenderer>> create(
             const storage::SceneFile& scene, const RendererOptions& options = {});
+    /** Pages through `pages` (e.g. a streaming cache), which must outlive the renderer. */
+    [[nodiscard]] static Result<std::unique_ptr<FrameRenderer>> create(
+            const storage::SceneFile& scene, IPageAccess& pages, const RendererOptions& options = {});
 
     /** Renders width x height, supersampled `supersample` x `supersample` (1 = none). */
     [[nodiscard]] Result<Frame> render(
             const Camera& camera, SelectionOptions selection, int width, int height, int supersample = 1);
 
     const DrawList& lastDrawList() const noexcept { return mDrawList; }
+    /** Page failures first met by the last frame (each reported once). */
+    const std::vector<Status>& newFailures() const noexcept { return mSelection.newFailures(); }
 
 private:
-    FrameRenderer(const storage::SceneFile& scene, std::unique_ptr<Renderer> renderer);
+    FrameRenderer(const storage::SceneFile& scene, std::unique_ptr<IPageAccess> ownedPages, IPageAccess& pages);
 
+    std::unique_ptr<IPageAccess> mOwnedPages;
+    IPageAccess& mPages;
     Selection mSelection;
     std::unique_ptr<Renderer> mRenderer;
     DrawList mDrawList;

@@ -18,6 +18,9 @@ struct FrameStats {
     std::uint64_t trianglesDrawn = 0;
     std::uint64_t geometryDraws = 0; ///< draw commands for geometry (merged page runs)
     std::uint64_t pagesUploaded = 0; ///< geometry pages sent to the GPU this frame
+    /** Cells drawn coarser than the ε rule wanted because pages were not resident ("debt"). */
+    std::uint64_t nodesDeferred = 0;
+    std::uint64_t pagesMissing = 0; ///< page lookups that found no usable page (pending or failed)
     double selectMs = 0.0;
     double drawMs = 0.0;  ///< submission + GPU until finished (glFinish)
     double totalMs = 0.0;

@@ -4,6 +4,7 @@
 #include <ff/runtime/DrawList.h>
 #include <ff/runtime/FrameStats.h>
 #include <ff/runtime/Image.h>
+#include <ff/runtime/PageAccess.h>
 #include <ff/storage/SceneFile.h>
 #include <ff/storage/Status.h>
 
@@ -31,8 +32,9 @@ struct RendererOptions {
  */
 class Renderer {
 public:
+    /** Geometry pages are read through `pages`, which must outlive the renderer. */
     [[nodiscard]] static Result<std::unique_ptr<Renderer>> create(
-            const storage::SceneFile& scene, const RendererOptions& options = {});
+            const storage::SceneFile& scene, IPageAccess& pages, const RendererOptions& options = {});
     ~Renderer();
     Renderer(const Renderer&) = delete;
     Renderer& operator=(const Renderer&) = delete;

@@ -4,10 +4,13 @@
 #include <ff/runtime/DrawList.h>
 #include <ff/runtime/FrameStats.h>
 #include <ff/runtime/Frustum.h>
+#include <ff/runtime/PageAccess.h>
 #include <ff/storage/SceneFile.h>
 #include <ff/storage/Status.h>
 
 #include <cstdint>
+#include <string>
+#include <unordered_set>
 #include <vector>
 
 namespace ff::runtime {
@@ -33,15 +36,23 @@ struct SelectionOptions {
  * children in back-to-front order. Instances enter their prototype's hierarchy with the
  * instance transform. CPU only: no GL here.
  *
+ * Pages come through an IPageAccess and selection never waits for one: a cell whose children
+ * or triangles are not Ready is drawn as its own cube instead (counted as debt in the stats)
+ * and the missing pages are asked for, larger projected size first. A failed page leaves its
+ * subtree drawn with the nearest resident ancestor's cube and is reported once.
+ *
  * Main thread only. Scratch memory is reused between frames.
  */
 class Selection {
 public:
-    explicit Selection(const storage::SceneFile& scene);
+    Selection(const storage::SceneFile& scene, IPageAccess& pages);
 
-    /** Fills `out` (cleared first) and the selection counters of `stats`.
-     *  Errors: Corrupt (naming the page) when a node or page fails its checks. */
+    /** Fills `out` (cleared first) and the selection counters of `stats`. Errors only for what
+     *  leaves nothing to draw: the root page failed. */
     [[nodiscard]] Status select(const Camera& camera, const SelectionOptions& options, DrawList& out, FrameStats& stats);
+
+    /** Failures first met during the last select() (each is reported once per Selection). */
+    const std::vector<Status>& newFailures() const noexcept { return mNewFailures; }
 
 private:
     struct ChildEntry {
@@ -49,15 +60,26 @@ private:
         float distance;
     };
 
-    Status visit(const storage::NodeRecord& node, std::uint32_t transform);
-    Status emitGeometry(const storage::NodeRecord& node, std::uint32_t transform);
+    enum class Fetch { Ready, Missing };
+
+    void visit(const storage::NodeRecord& node, std::uint32_t transform);
+    /** Looks a page up; Failed pages are reported once and read as Missing. */
+    Fetch fetch(std::uint64_t page, storage::PageType type, float priority, std::span<const std::byte>& payload);
+    Fetch readNode(storage::NodeRef ref, float priority, storage::NodeRecord& out);
+    /** Appends the node's own geometry runs to mSegments if every page is Ready. */
+    Fetch collectGeometry(const storage::NodeRecord& node, float priority);
     void emitCube(const storage::NodeRecord& node, std::uint32_t transform);
+    void defer(const storage::NodeRecord& node, std::uint32_t transform);
     std::uint32_t pushTransform(const glm::mat4& transform);
-    Status selectFull();
+    void selectFull();
     void mergeGeometryDraws();
-    Status collectPrototypeGeometry(std::uint32_t prototype);
+    void collectPrototypeGeometry(std::uint32_t prototype);
+    void reportFailure(const Status& failure);
 
     const storage::SceneFile& mScene;
+    IPageAccess& mPages;
+    std::unordered_set<std::string> mReported; ///< messages ("page N: ...") already reported
+    std::vector<Status> mNewFailures;
     // Per-frame state.
     const Camera* mCamera = nullptr;
     SelectionOptions mOptions;

@@ -60,6 +60,10 @@ public:
     /** Reads and validates one node record (ranges, kinds, finite bounds). */
     [[nodiscard]] Result<NodeRecord> node(NodeRef ref) const;
 
+    /** Decodes and validates slot `ref.slot` from the payload of Nodes page `ref.page` that
+     *  the caller already holds (e.g. from a page cache); the same checks as node(). */
+    [[nodiscard]] Result<NodeRecord> decodeNode(std::span<const std::byte> nodesPagePayload, NodeRef ref) const;
+
     /** The `index`-th child of `parent` (index < parent.childCount). */
     [[nodiscard]] Result<NodeRecord> child(const NodeRecord& parent, std::uint32_t index) const;
 

@@ -1,0 +1,33 @@
+#pragma once
+
+#include <ff/cache/PageCache.h>
+#include <ff/runtime/PageAccess.h>
+
+#include <cstdint>
+#include <unordered_map>
+
+namespace ff::runtime {
+
+/**
+ * Pages through the streaming PageCache: Ready only when resident, otherwise requested with the
+ * caller's priority. A frame is bracketed by beginFrame()/endFrame() (endFrame cancels requests
+ * the frame no longer wanted); installing finished reads is the caller's pump(), once per frame,
+ * under an upload budget. Main thread only.
+ */
+class CachedPageAccess final : public IPageAccess {
+public:
+    CachedPageAccess(cache::PageCache& cache, std::uint32_t pageSize);
+
+    void beginFrame() override;
+    [[nodiscard]] PageLookup lookup(std::uint64_t page, storage::PageType type, float priority) override;
+    void endFrame() override;
+
+    cache::PageCache& cache() noexcept { return mCache; }
+
+private:
+    cache::PageCache& mCache;
+    std::uint32_t mPageSize;
+    std::unordered_map<std::uint64_t, Status> mFailures;
+};
+
+} // namespace ff::runtime

@@ -1,0 +1,51 @@
+#pragma once
+
+#include <ff/storage/SceneFile.h>
+#include <ff/storage/SceneFormat.h>
+#include <ff/storage/Status.h>
+
+#include <cstdint>
+#include <span>
+#include <unordered_map>
+
+namespace ff::runtime {
+
+enum class PageAvailability {
+    Ready,   ///< the payload can be used this frame
+    Pending, ///< not resident yet; it has been asked for
+    Failed,  ///< unreadable or corrupt; `failure` says why (and stays valid)
+};
+
+struct PageLookup {
+    PageAvailability availability = PageAvailability::Pending;
+    std::span<const std::byte> payload; ///< Ready: pagePayloadBytes(pageSize) bytes
+    const Status* failure = nullptr;    ///< Failed: the reason, owned by the IPageAccess
+};
+
+/**
+ * How a frame reaches scene-file pages. Selection never waits: a page that is not Ready makes it
+ * draw something coarser that is, and the lookup itself asks for the page with the given
+ * priority (larger = sooner; selection passes projected size in pixels).
+ *
+ * Main thread only. Payloads stay valid until the next beginFrame().
+ */
+class IPageAccess {
+public:
+    virtual ~IPageAccess() = default;
+    virtual void beginFrame() {}
+    [[nodiscard]] virtual PageLookup lookup(std::uint64_t page, storage::PageType type, float priority) = 0;
+    virtual void endFrame() {}
+};
+
+/** Every page at once through the scene file's memory map: the synchronous mode. */
+class MappedPageAccess final : public IPageAccess {
+public:
+    explicit MappedPageAccess(const storage::SceneFile& scene) : mScene(scene) {}
+    [[nodiscard]] PageLookup lookup(std::uint64_t page, storage::PageType type, float priority) override;
+
+private:
+    const storage::SceneFile& mScene;
+    std::unordered_map<std::uint64_t, Status> mFailures;
+};
+
+} // namespace ff::runtime

@@ -1,0 +1,40 @@
+#include <ff/runtime/CachedPageAccess.h>
+
+#include <cstring>
+
+namespace ff::runtime {
+
+CachedPageAccess::CachedPageAccess(cache::PageCache& cache, std::uint32_t pageSize)
+    : mCache(cache)
+    , mPageSize(pageSize) {}
+
+void CachedPageAccess::beginFrame() { mCache.beginFrame(); }
+
+void CachedPageAccess::endFrame() { mCache.endFrame(); }
+
+PageLookup CachedPageAccess::lookup(std::uint64_t page, storage::PageType type, float priority) {
+    if (const auto it = mFailures.find(page); it != mFailures.end())
+        return {PageAvailability::Failed, {}, &it->second};
+    if (const auto bytes = mCache.tryGet(page)) {
+        // The cache verified the checksum and the page's own index; the type is ours to check.
+        storage::PageTrailer trailer{};
+        std::memcpy(&trailer, bytes->data() + storage::pagePayloadBytes(mPageSize), sizeof(trailer));
+        if (trailer.pageType != static_cast<std::uint16_t>(type)) {
+            const auto [it, inserted] = mFailures.emplace(
+                    page, Status(ErrorCode::Corrupt, "page " + std::to_string(page) + ": page type " +
+                                                             std::to_string(trailer.pageType) + ", expected " +
+                                                             std::to_string(static_cast<int>(type))));
+            return {PageAvailability::Failed, {}, &it->second};
+        }
+        return {PageAvailability::Ready, bytes->first(storage::pagePayloadBytes(mPageSize)), nullptr};
+    }
+    if (mCache.state(page) == cache::PageState::Failed) {
+        const auto [it, inserted] = mFailures.emplace(page, mCache.failure(page).value_or(
+                Status(ErrorCode::IoError, "page " + std::to_string(page) + ": unreadable")));
+        return {PageAvailability::Failed, {}, &it->second};
+    }
+    mCache.request(page, priority);
+    return {PageAvailability::Pending, {}, nullptr};
+}
+
+} // namespace ff::runtime

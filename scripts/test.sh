@@ -1,0 +1,20 @@
+#!/usr/bin/env bash
+# The whole test suite: install, build with warnings as errors under AddressSanitizer and
+# UndefinedBehaviorSanitizer and run every test; then build the threaded modules under
+# ThreadSanitizer and run their tests.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+
+bash scripts/install-deps.sh
+jobs=$(nproc)
+
+cmake -S . -B build-asan -G Ninja -DCMAKE_BUILD_TYPE=Debug -DFF_WERROR=ON -DFF_SANITIZE=address,undefined
+cmake --build build-asan -j "$jobs"
+# LLVM inside llvmpipe keeps allocations for the life of the process; they are not ours.
+export LSAN_OPTIONS="suppressions=$PWD/scripts/lsan.supp:print_suppressions=0"
+export UBSAN_OPTIONS="print_stacktrace=1:halt_on_error=1"
+ctest --test-dir build-asan --output-on-failure -j "$jobs"
+
+cmake -S . -B build-tsan -G Ninja -DCMAKE_BUILD_TYPE=Debug -DFF_WERROR=ON -DFF_SANITIZE=thread
+cmake --build build-tsan -j "$jobs" --target ff_builder_tests ff_storage_tests
+ctest --test-dir build-tsan --output-on-failure -j "$jobs" -L "builder|storage"

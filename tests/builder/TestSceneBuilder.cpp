@@ -1,0 +1,793 @@
+// SceneBuilder end to end: scenes go in through ISceneSink, come out as .ffs files, and are read
+// back through storage::SceneFile. Every stored triangle must be reachable exactly once from the
+// prototype roots, the counts in the header must match what is reachable, the build must be
+// deterministic, and no temporary file may outlive a build, whether it succeeds or fails.
+
+#include "RecordingSink.h"
+
+#include <ff/builder/Generators.h>
+#include <ff/builder/SceneBuilder.h>
+#include <ff/storage/SceneFile.h>
+
+#include <glm/gtc/matrix_transform.hpp>
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <iterator>
+#include <limits>
+#include <memory>
+#include <numeric>
+#include <optional>
+#include <set>
+#include <span>
+#include <string>
+#include <utility>
+#include <vector>
+
+namespace ff::builder {
+namespace {
+
+namespace fs = std::filesystem;
+using testing::RecordingSink;
+
+// ---- files -----------------------------------------------------------------------------------
+
+/** A fresh, empty directory for the running test. */
+fs::path freshTestDir() {
+    const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
+    std::string name = std::string(info->test_suite_name()) + "." + info->name();
+    std::replace(name.begin(), name.end(), '/', '_');
+    const fs::path dir = fs::path(FF_TEST_TMP_DIR) / name;
+    std::error_code ec;
+    fs::remove_all(dir, ec);
+    fs::create_directories(dir);
+    return dir;
+}
+
+/** Names in `dir`, hidden ones included, sorted. */
+std::vector<std::string> listDirectory(const fs::path& dir) {
+    std::vector<std::string> names;
+    for (const fs::directory_entry& entry : fs::directory_iterator(dir))
+        names.push_back(entry.path().filename().string());
+    std::sort(names.begin(), names.end());
+    return names;
+}
+
+std::vector<char> readBytes(const fs::path& path) {
+    std::ifstream in(path, std::ios::binary);
+    return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
+}
+
+// ---- scenes ----------------------------------------------------------------------------------
+
+BuildOptions smallOptions(unsigned threads = 1) {
+    BuildOptions options;
+    options.memoryBudgetBytes = SceneBuilder::kMinimumBudgetBytes;
+    options.pageSize = storage::kMinPageSize; // many pages: treelets and runs cross page ends
+    options.threads = threads;
+    return options;
+}
+
+/** A generator's scene, recorded so that it can be fed to several builders. */
+RecordingSink generate(const std::string& text) {
+    RecordingSink scene;
+    Result<GeneratorSpec> spec = parseGeneratorSpec(text);
+    EXPECT_TRUE(spec.isOk()) << spec.status().toString();
+    if (spec.isOk()) {
+        Result<GeneratorReport> report = runGenerator(*spec, scene);
+        EXPECT_TRUE(report.isOk()) << report.status().toString();
+    }
+    return scene;
+}
+
+/** Feeds a recorded scene into `sink` in batches, as a source would. */
+Status replay(const RecordingSink& scene, ISceneSink& sink) {
+    constexpr std::size_t kBatch = 4096;
+    std::vector<PrototypeId> ids;
+    for (const RecordingSink::Prototype& p : scene.prototypes()) {
+        FF_ASSIGN_OR_RETURN(PrototypeId id, sink.addPrototype(p.name));
+        ids.push_back(id);
+    }
+    for (std::size_t p = 0; p < scene.prototypes().size(); ++p) {
+        const auto& triangles = scene.prototypes()[p].triangles;
+        for (std::size_t begin = 0; begin < triangles.size(); begin += kBatch) {
+            const std::size_t count = std::min(kBatch, triangles.size() - begin);
+            FF_RETURN_IF_ERROR(
+                    sink.addTriangles(ids[p], std::span(triangles).subspan(begin, count)));
+        }
+    }
+    for (const RecordingSink::Instance& instance : scene.instances())
+        FF_RETURN_IF_ERROR(sink.addInstance(ids[instance.prototype], instance.transform));
+    return Status::ok();
+}
+
+/** Builds `scene` into `output`; the Result of finish() (or of the step that failed). */
+Result<BuildReport>
+buildScene(const RecordingSink& scene, const fs::path& output, const BuildOptions& options) {
+    FF_ASSIGN_OR_RETURN(
+            std::unique_ptr<SceneBuilder> builder, SceneBuilder::create(output, options));
+    FF_RETURN_IF_ERROR(replay(scene, *builder));
+    return builder->finish();
+}
+
+BuildReport
+buildOrFail(const RecordingSink& scene, const fs::path& output, const BuildOptions& options) {
+    Result<BuildReport> report = buildScene(scene, output, options);
+    EXPECT_TRUE(report.isOk()) << report.status().toString();
+    return report.isOk() ? report.value() : BuildReport{};
+}
+
+SourceVertex vertexAt(const glm::vec3& p, const glm::vec3& color = glm::vec3(0.6f, 0.5f, 0.4f)) {
+    return {p, glm::vec3(0.0f), glm::vec4(color, 1.0f)};
+}
+
+/** A small triangle with centroid `c` and edge `size`, in a plane tilted so every face sees it. */
+storage::PackedTriangle triangleAt(const glm::vec3& c, float size) {
+    const float t = size / 3.0f;
+    return packTriangle(
+            vertexAt(c + glm::vec3(-t, -t, 0.5f * t)),
+            vertexAt(c + glm::vec3(2.0f * t, -t, -t)),
+            vertexAt(c + glm::vec3(-t, 2.0f * t, 0.5f * t)));
+}
+
+/** Deterministic pseudo-random numbers in [0, 1). */
+class Lcg {
+public:
+    explicit Lcg(std::uint64_t seed)
+        : mState(seed) {}
+    float next() {
+        mState = mState * 6364136223846793005ull + 1442695040888963407ull;
+        return static_cast<float>(mState >> 40) / static_cast<float>(1ull << 24);
+    }
+    glm::vec3 inBox(const glm::vec3& lo, const glm::vec3& hi) {
+        const float x = next();
+        const float y = next();
+        const float z = next();
+        return lo + (hi - lo) * glm::vec3(x, y, z);
+    }
+
+private:
+    std::uint64_t mState;
+};
+
+/** `count` small triangles scattered through the box [lo, hi]. */
+std::vector<storage::PackedTriangle>
+cluster(std::size_t count, const glm::vec3& lo, const glm::vec3& hi, std::uint64_t seed) {
+    Lcg rng(seed);
+    std::vector<storage::PackedTriangle> out;
+    out.reserve(count);
+    for (std::size_t i = 0; i < count; ++i)
+        out.push_back(triangleAt(rng.inBox(lo, hi), 0.002f));
+    return out;
+}
+
+/** One prototype with the given triangles and one identity instance. */
+RecordingSink singlePrototypeScene(const std::vector<storage::PackedTriangle>& triangles) {
+    RecordingSink scene;
+    const PrototypeId id = scene.addPrototype("mesh").value();
+    EXPECT_TRUE(scene.addTriangles(id, triangles).isOk());
+    EXPECT_TRUE(scene.addInstance(id, glm::mat4(1.0f)).isOk());
+    return scene;
+}
+
+bool isDrawable(const storage::PackedTriangle& t) {
+    std::array<glm::dvec3, 3> p;
+    for (std::size_t k = 0; k < 3; ++k) {
+        for (int a = 0; a < 3; ++a) {
+            if (!std::isfinite(t.vertices[k].position[static_cast<std::size_t>(a)]))
+                return false;
+            p[k][a] = t.vertices[k].position[static_cast<std::size_t>(a)];
+        }
+    }
+    const glm::dvec3 n = glm::cross(p[1] - p[0], p[2] - p[0]);
+    return glm::dot(n, n) > 0.0;
+}
+
+std::string bytesOf(const storage::PackedTriangle& t) {
+    return {reinterpret_cast<const char*>(&t), sizeof(t)}; // byte view: may alias
+}
+
+/** The drawable triangles of each prototype as sorted byte strings (a multiset). */
+std::vector<std::vector<std::string>> expectedTriangles(const RecordingSink& scene) {
+    std::vector<std::vector<std::string>> out;
+    for (const RecordingSink::Prototype& p : scene.prototypes()) {
+        std::vector<std::string> bytes;
+        for (const storage::PackedTriangle& t : p.triangles)
+            if (isDrawable(t))
+                bytes.push_back(bytesOf(t));
+        std::sort(bytes.begin(), bytes.end());
+        out.push_back(std::move(bytes));
+    }
+    return out;
+}
+
+// ---- reading a scene back --------------------------------------------------------------------
+
+/** What is reachable in a scene file, gathered by walking it from the roots. */
+struct StoredScene {
+    std::unique_ptr<storage::SceneFile> file;
+    std::uint64_t nodes = 0;                  ///< distinct node records reached
+    std::vector<std::uint32_t> instanceNodes; ///< instance index of every Instance node
+    std::vector<std::vector<std::string>> prototypeTriangles; ///< sorted, per prototype
+    std::vector<std::uint64_t> prototypeNodes;
+    std::uint64_t storedTriangles = 0;
+};
+
+bool contains(
+        const std::array<float, 3>& lo,
+        const std::array<float, 3>& hi,
+        const std::array<float, 3>& p) {
+    for (std::size_t a = 0; a < 3; ++a)
+        if (!(lo[a] <= p[a] && p[a] <= hi[a]))
+            return false;
+    return true;
+}
+
+/**
+ * Walks one hierarchy depth-first: every node record valid, reached once, its bounds inside its
+ * parent's, its children inside one page, its own triangles inside its bounds. Cell triangles
+ * go to `triangles`, Instance nodes to `instanceNodes`.
+ */
+void walkHierarchy(
+        const storage::SceneFile& file,
+        storage::NodeRef root,
+        std::set<std::pair<std::uint32_t, std::uint32_t>>& seen,
+        std::uint64_t& nodes,
+        std::vector<std::string>& triangles,
+        std::vector<std::uint32_t>& instanceNodes) {
+    struct Item {
+        storage::NodeRef ref;
+        std::optional<storage::NodeRecord> parent;
+    };
+    const std::uint32_t slots = storage::nodesPerPage(file.pageSize());
+    std::vector<Item> stack = {{root, std::nullopt}};
+    std::vector<storage::GeometrySegment> segments;
+    while (!stack.empty()) {
+        const Item item = stack.back();
+        stack.pop_back();
+        ASSERT_TRUE(seen.insert({item.ref.page, item.ref.slot}).second)
+                << "node (" << item.ref.page << ", " << item.ref.slot << ") reached twice";
+        Result<storage::NodeRecord> record = file.node(item.ref);
+        ASSERT_TRUE(record.isOk()) << record.status().toString();
+        const storage::NodeRecord& node = *record;
+        ++nodes;
+        if (item.parent) {
+            EXPECT_TRUE(
+                    contains(item.parent->boundsMin, item.parent->boundsMax, node.boundsMin) &&
+                    contains(item.parent->boundsMin, item.parent->boundsMax, node.boundsMax))
+                    << "node (" << item.ref.page << ", " << item.ref.slot
+                    << ") pokes out of its parent";
+        }
+        EXPECT_NE(node.flags & storage::kNodeHasCube, 0);
+        if (node.kind == static_cast<std::uint8_t>(storage::NodeKind::Instance)) {
+            EXPECT_EQ(node.childCount, 0);
+            instanceNodes.push_back(node.geometryPage);
+            continue;
+        }
+        segments.clear();
+        ASSERT_TRUE(file.geometrySegments(node, segments).isOk());
+        std::uint64_t own = 0;
+        for (const storage::GeometrySegment& segment : segments) {
+            Result<std::span<const std::byte>> bytes = file.segmentBytes(segment);
+            ASSERT_TRUE(bytes.isOk()) << bytes.status().toString();
+            for (std::size_t i = 0; i < segment.count; ++i) {
+                storage::PackedTriangle t;
+                std::memcpy(&t, bytes->data() + i * sizeof(t), sizeof(t));
+                for (const storage::PackedVertex& v : t.vertices)
+                    EXPECT_TRUE(contains(node.boundsMin, node.boundsMax, v.position))
+                            << "triangle outside its node's bounds";
+                triangles.push_back(bytesOf(t));
+                ++own;
+            }
+        }
+        EXPECT_EQ(own, node.geometryCount);
+        if (node.childCount > 0) {
+            // The reader already refuses child lists that cross a page end; say it here too.
+            EXPECT_LE(node.firstChild.slot + node.childCount, slots);
+        }
+        for (std::uint32_t c = node.childCount; c-- > 0;)
+            stack.push_back({storage::SceneFile::childRef(node, c), node});
+    }
+}
+
+/** Opens `path`, verifies every page and walks the instance level and every prototype. */
+void readScene(const fs::path& path, StoredScene& out) {
+    Result<std::unique_ptr<storage::SceneFile>> file = storage::SceneFile::open(path);
+    ASSERT_TRUE(file.isOk()) << file.status().toString();
+    out.file = std::move(file.value());
+    const storage::SceneFile& f = *out.file;
+    ASSERT_TRUE(f.verifyAll().isOk()) << f.verifyAll().toString();
+
+    std::set<std::pair<std::uint32_t, std::uint32_t>> seen;
+    std::vector<std::string> noTriangles;
+    ASSERT_NE(f.header().root, storage::kNullNodeRef);
+    ASSERT_NO_FATAL_FAILURE(
+            walkHierarchy(f, f.header().root, seen, out.nodes, noTriangles, out.instanceNodes));
+    EXPECT_TRUE(noTriangles.empty()) << "the instance level holds no geometry of its own";
+
+    for (const storage::PrototypeRecord& prototype : f.prototypes()) {
+        std::vector<std::string> triangles;
+        std::vector<std::uint32_t> instances;
+        std::uint64_t nodes = 0;
+        ASSERT_NO_FATAL_FAILURE(
+                walkHierarchy(f, prototype.root, seen, nodes, triangles, instances));
+        EXPECT_TRUE(instances.empty()) << "a prototype holds no instances";
+        EXPECT_EQ(prototype.triangleCount, triangles.size());
+        EXPECT_EQ(prototype.nodeCount, nodes);
+        std::sort(triangles.begin(), triangles.end());
+        out.storedTriangles += triangles.size();
+        out.nodes += nodes;
+        out.prototypeNodes.push_back(nodes);
+        out.prototypeTriangles.push_back(std::move(triangles));
+    }
+}
+
+/** The checks every built scene must pass against the scene that was fed in. */
+void expectSceneMatches(
+        const fs::path& path, const RecordingSink& scene, const BuildReport& report) {
+    StoredScene stored;
+    ASSERT_NO_FATAL_FAILURE(readScene(path, stored));
+    const storage::SceneFile& f = *stored.file;
+
+    // Every drawable triangle exactly once, in the prototype it was given to.
+    const std::vector<std::vector<std::string>> expected = expectedTriangles(scene);
+    std::vector<std::size_t> nonEmpty;
+    for (std::size_t p = 0; p < expected.size(); ++p)
+        if (!expected[p].empty())
+            nonEmpty.push_back(p);
+    ASSERT_EQ(stored.prototypeTriangles.size(), nonEmpty.size());
+    for (std::size_t i = 0; i < nonEmpty.size(); ++i)
+        EXPECT_TRUE(stored.prototypeTriangles[i] == expected[nonEmpty[i]])
+                << "prototype " << nonEmpty[i] << " differs";
+
+    // Counts.
+    EXPECT_EQ(f.header().storedTriangles, stored.storedTriangles);
+    EXPECT_EQ(f.header().nodeCount, stored.nodes);
+    EXPECT_EQ(report.storedTriangles, stored.storedTriangles);
+    EXPECT_EQ(report.nodes, stored.nodes);
+    std::uint64_t instanced = 0;
+    for (const storage::InstanceRecord& instance : f.instances())
+        instanced += f.prototypes()[instance.prototype].triangleCount;
+    EXPECT_EQ(f.header().instancedTriangles, instanced);
+    EXPECT_EQ(report.instancedTriangles, instanced);
+    EXPECT_EQ(report.instances, f.instances().size());
+
+    // Each instance is reached through exactly one Instance node.
+    std::vector<std::uint32_t> indices = stored.instanceNodes;
+    std::sort(indices.begin(), indices.end());
+    std::vector<std::uint32_t> all(f.instances().size());
+    std::iota(all.begin(), all.end(), 0u);
+    EXPECT_EQ(indices, all);
+}
+
+// ---- every triangle once ---------------------------------------------------------------------
+
+TEST(SceneBuilderTest, EveryTriangleIsStoredExactlyOnce) {
+    const fs::path dir = freshTestDir();
+    const RecordingSink scene = generate("terrain:triangles=22000");
+    const BuildReport report = buildOrFail(scene, dir / "terrain.ffs", smallOptions());
+    EXPECT_EQ(report.inputTriangles, scene.storedTriangles());
+    EXPECT_EQ(report.droppedNonFinite + report.droppedDegenerate, 0u);
+    EXPECT_EQ(report.storedTriangles, scene.storedTriangles());
+    EXPECT_EQ(report.chunks, 1u);
+    EXPECT_GT(report.maxDepth, 2u);
+    // Built in memory: the prototype's run file is all that was spilled.
+    EXPECT_EQ(report.spillBytes, scene.storedTriangles() * sizeof(storage::PackedTriangle));
+    expectSceneMatches(dir / "terrain.ffs", scene, report);
+}
+
+TEST(SceneBuilderTest, DefaultPageSizeAndLargeTrianglesRoundTrip) {
+    const fs::path dir = freshTestDir();
+    std::vector<storage::PackedTriangle> triangles =
+            cluster(3000, glm::vec3(0.0f), glm::vec3(1.0f), 1);
+    // Large triangles that stay at inner nodes.
+    for (int k = 0; k < 20; ++k)
+        triangles.push_back(triangleAt(glm::vec3(0.5f, 0.5f, 0.05f * static_cast<float>(k)), 0.6f));
+    const RecordingSink scene = singlePrototypeScene(triangles);
+    BuildOptions options = smallOptions();
+    options.pageSize = storage::kDefaultPageSize;
+    const BuildReport report = buildOrFail(scene, dir / "scene.ffs", options);
+    expectSceneMatches(dir / "scene.ffs", scene, report);
+}
+
+// ---- instancing ------------------------------------------------------------------------------
+
+TEST(SceneBuilderTest, InstancedPrototypeIsStoredOnce) {
+    const fs::path dir = freshTestDir();
+    RecordingSink scene;
+    const PrototypeId id = scene.addPrototype("rock").value();
+    const std::vector<storage::PackedTriangle> rock =
+            cluster(500, glm::vec3(-1.0f), glm::vec3(1.0f), 9);
+    ASSERT_TRUE(scene.addTriangles(id, rock).isOk());
+    constexpr int kInstances = 40;
+    std::vector<glm::mat4> transforms;
+    for (int i = 0; i < kInstances; ++i) {
+        glm::mat4 m = glm::translate(
+                glm::mat4(1.0f),
+                glm::vec3(
+                        4.0f * static_cast<float>(i % 8), 0.0f, 4.0f * static_cast<float>(i / 8)));
+        m = glm::rotate(m, 0.3f * static_cast<float>(i), glm::vec3(0.0f, 1.0f, 0.0f));
+        m = glm::scale(m, glm::vec3(0.5f + 0.05f * static_cast<float>(i)));
+        transforms.push_back(m);
+        ASSERT_TRUE(scene.addInstance(id, m).isOk());
+    }
+    // Two instances in the same place: space cannot separate them.
+    ASSERT_TRUE(scene.addInstance(id, transforms[3]).isOk());
+    transforms.push_back(transforms[3]);
+
+    const BuildReport report = buildOrFail(scene, dir / "rocks.ffs", smallOptions());
+    EXPECT_EQ(report.storedTriangles, rock.size());
+    EXPECT_EQ(report.instancedTriangles, rock.size() * transforms.size());
+    EXPECT_EQ(report.instances, transforms.size());
+    expectSceneMatches(dir / "rocks.ffs", scene, report);
+
+    Result<std::unique_ptr<storage::SceneFile>> file = storage::SceneFile::open(dir / "rocks.ffs");
+    ASSERT_TRUE(file.isOk());
+    const storage::SceneFile& f = **file;
+    EXPECT_EQ(f.header().storedTriangles, rock.size());
+    ASSERT_EQ(f.prototypes().size(), 1u);
+    ASSERT_EQ(f.instances().size(), transforms.size());
+    for (std::size_t i = 0; i < transforms.size(); ++i) {
+        EXPECT_EQ(f.instances()[i].prototype, 0u);
+        for (int row = 0; row < 3; ++row)
+            for (int col = 0; col < 4; ++col)
+                EXPECT_EQ(
+                        f.instances()[i].transform[static_cast<std::size_t>(row * 4 + col)],
+                        transforms[i][col][row]);
+    }
+}
+
+TEST(SceneBuilderTest, ManyPrototypesAndInstancesFromAGenerator) {
+    const fs::path dir = freshTestDir();
+    const RecordingSink scene = generate("molecule:spheres=200");
+    ASSERT_GT(scene.prototypes().size(), 1u);
+    const BuildReport report = buildOrFail(scene, dir / "molecule.ffs", smallOptions());
+    EXPECT_EQ(report.prototypes, scene.prototypes().size());
+    EXPECT_EQ(report.instances, scene.instances().size());
+    expectSceneMatches(dir / "molecule.ffs", scene, report);
+}
+
+// ---- invalid input ---------------------------------------------------------------------------
+
+TEST(SceneBuilderTest, DropsNonFiniteAndZeroAreaTrianglesAndCountsThem) {
+    const fs::path dir = freshTestDir();
+    std::vector<storage::PackedTriangle> triangles =
+            cluster(100, glm::vec3(0.0f), glm::vec3(1.0f), 4);
+    const float nan = std::numeric_limits<float>::quiet_NaN();
+    const float inf = std::numeric_limits<float>::infinity();
+    auto broken = [&](std::size_t base, int vertex, int axis, float value) {
+        storage::PackedTriangle t = triangles[base];
+        t.vertices[static_cast<std::size_t>(vertex)].position[static_cast<std::size_t>(axis)] =
+                value;
+        return t;
+    };
+    std::vector<storage::PackedTriangle> input;
+    for (std::size_t i = 0; i < triangles.size(); ++i) {
+        input.push_back(triangles[i]);
+        if (i == 10)
+            input.push_back(broken(i, 0, 0, nan));
+        if (i == 20)
+            input.push_back(broken(i, 2, 1, inf));
+        if (i == 30)
+            input.push_back(broken(i, 1, 2, -inf));
+        if (i == 40) // all three vertices equal
+            input.push_back(packTriangle(
+                    vertexAt(glm::vec3(0.5f)),
+                    vertexAt(glm::vec3(0.5f)),
+                    vertexAt(glm::vec3(0.5f))));
+        if (i == 50) // collinear
+            input.push_back(packTriangle(
+                    vertexAt(glm::vec3(0.1f)),
+                    vertexAt(glm::vec3(0.2f)),
+                    vertexAt(glm::vec3(0.4f))));
+    }
+    input.push_back(broken(0, 1, 1, nan)); // last in its batch
+    const RecordingSink scene = singlePrototypeScene(input);
+    const BuildReport report = buildOrFail(scene, dir / "scene.ffs", smallOptions());
+    EXPECT_EQ(report.inputTriangles, input.size());
+    EXPECT_EQ(report.droppedNonFinite, 4u);
+    EXPECT_EQ(report.droppedDegenerate, 2u);
+    EXPECT_EQ(report.storedTriangles, 100u);
+    expectSceneMatches(dir / "scene.ffs", scene, report);
+}
+
+TEST(SceneBuilderTest, RefusesInstanceWithNonFiniteTransform) {
+    const fs::path dir = freshTestDir();
+    Result<std::unique_ptr<SceneBuilder>> builder =
+            SceneBuilder::create(dir / "scene.ffs", smallOptions());
+    ASSERT_TRUE(builder.isOk()) << builder.status().toString();
+    SceneBuilder& b = **builder;
+    const PrototypeId id = b.addPrototype("mesh").value();
+    const std::vector<storage::PackedTriangle> triangles =
+            cluster(50, glm::vec3(0.0f), glm::vec3(1.0f), 2);
+    ASSERT_TRUE(b.addTriangles(id, triangles).isOk());
+    glm::mat4 bad(1.0f);
+    bad[3][1] = std::numeric_limits<float>::quiet_NaN();
+    EXPECT_EQ(b.addInstance(id, bad).code(), ErrorCode::InvalidInput);
+    bad = glm::mat4(1.0f);
+    bad[0][0] = std::numeric_limits<float>::infinity();
+    EXPECT_EQ(b.addInstance(id, bad).code(), ErrorCode::InvalidInput);
+    ASSERT_TRUE(b.addInstance(id, glm::mat4(1.0f)).isOk());
+    EXPECT_EQ(b.addInstance(id + 1, glm::mat4(1.0f)).code(), ErrorCode::InvalidArgument);
+    EXPECT_EQ(b.addTriangles(id + 1, triangles).code(), ErrorCode::InvalidArgument);
+    Result<BuildReport> report = b.finish();
+    ASSERT_TRUE(report.isOk()) << report.status().toString();
+    EXPECT_EQ(report->instances, 1u);
+    EXPECT_EQ(report->instancedTriangles, 50u);
+}
+
+TEST(SceneBuilderTest, PrototypeWithoutDrawableTrianglesIsLeftOut) {
+    const fs::path dir = freshTestDir();
+    RecordingSink scene;
+    const PrototypeId empty = scene.addPrototype("nothing").value();
+    const PrototypeId mesh = scene.addPrototype("mesh").value();
+    const PrototypeId broken = scene.addPrototype("broken").value();
+    ASSERT_TRUE(scene.addTriangles(mesh, cluster(200, glm::vec3(0.0f), glm::vec3(1.0f), 3)).isOk());
+    storage::PackedTriangle nanTriangle = cluster(1, glm::vec3(0.0f), glm::vec3(1.0f), 5)[0];
+    nanTriangle.vertices[0].position[0] = std::numeric_limits<float>::quiet_NaN();
+    ASSERT_TRUE(scene.addTriangles(broken, std::span(&nanTriangle, 1)).isOk());
+    for (PrototypeId p : {empty, mesh, broken, mesh})
+        ASSERT_TRUE(
+                scene.addInstance(
+                             p, glm::translate(glm::mat4(1.0f), glm::vec3(static_cast<float>(p))))
+                        .isOk());
+    const BuildReport report = buildOrFail(scene, dir / "scene.ffs", smallOptions());
+    EXPECT_EQ(report.prototypes, 3u);
+    EXPECT_EQ(report.emptyPrototypes, 2u);
+    EXPECT_EQ(report.instances, 2u);
+    EXPECT_EQ(report.instancedTriangles, 400u);
+    expectSceneMatches(dir / "scene.ffs", scene, report);
+}
+
+// ---- determinism -----------------------------------------------------------------------------
+
+TEST(SceneBuilderTest, SameInputGivesByteIdenticalFiles) {
+    const fs::path dir = freshTestDir();
+    const RecordingSink scene = generate("molecule:spheres=100");
+    for (unsigned threads : {1u, 2u}) {
+        SCOPED_TRACE(::testing::Message() << threads << " threads");
+        const BuildOptions options = smallOptions(threads);
+        buildOrFail(scene, dir / "a.ffs", options);
+        buildOrFail(scene, dir / "b.ffs", options);
+        const std::vector<char> a = readBytes(dir / "a.ffs");
+        ASSERT_FALSE(a.empty());
+        EXPECT_TRUE(a == readBytes(dir / "b.ffs"));
+    }
+}
+
+// ---- out of core -----------------------------------------------------------------------------
+
+/** Triangles per chunk for the minimum budget (SceneBuilder::finish, PrototypeBuilder.h). */
+std::uint64_t chunkTriangles(unsigned threads) {
+    const std::uint64_t budget = SceneBuilder::kMinimumBudgetBytes;
+    return (budget - budget / 4) / threads / 160;
+}
+
+TEST(SceneBuilderTest, PrototypeLargerThanAChunkIsBuiltOutOfCore) {
+    const fs::path dir = freshTestDir();
+    constexpr unsigned kThreads = 4;
+    const RecordingSink scene = generate("terrain:triangles=60000");
+    ASSERT_GT(scene.storedTriangles(), 2 * chunkTriangles(kThreads));
+    const BuildReport first = buildOrFail(scene, dir / "a.ffs", smallOptions(kThreads));
+    EXPECT_GT(first.chunks, 1u) << buildReportJson(first);
+    // The run file, then the chunk files (which hold every triangle not kept above the chunks).
+    const std::uint64_t runBytes = scene.storedTriangles() * sizeof(storage::PackedTriangle);
+    EXPECT_GT(first.spillBytes, runBytes);
+    EXPECT_LE(first.spillBytes, 2 * runBytes);
+    expectSceneMatches(dir / "a.ffs", scene, first);
+
+    // Chunks built on several threads still land in the same order.
+    buildOrFail(scene, dir / "b.ffs", smallOptions(kThreads));
+    EXPECT_TRUE(readBytes(dir / "a.ffs") == readBytes(dir / "b.ffs"));
+    EXPECT_EQ(listDirectory(dir), (std::vector<std::string>{"a.ffs", "b.ffs"}));
+}
+
+// A triangle wider than a cell stops at it; when that cell is a chunk root it must go into the
+// chunk (whose octree keeps it at its root) rather than into the cell above it.
+TEST(SceneBuilderTest, LargeTriangleAloneInAChunkCellIsStored) {
+    const fs::path dir = freshTestDir();
+    constexpr unsigned kThreads = 8;
+    const std::size_t clusterSize = chunkTriangles(kThreads) + chunkTriangles(kThreads) / 4;
+    // Root cell ~[0, 2]^3; clusters in octants 0 and 7 are bigger than a chunk.
+    std::vector<storage::PackedTriangle> triangles =
+            cluster(clusterSize, glm::vec3(0.0f), glm::vec3(0.4f), 1);
+    const auto far = cluster(clusterSize, glm::vec3(1.6f), glm::vec3(2.0f), 2);
+    triangles.insert(triangles.end(), far.begin(), far.end());
+    // Centroid in octant 3 (x+, y+, z-), 1.05 wide: wider than the 1.0 cell of that octant.
+    triangles.push_back(packTriangle(
+            vertexAt({0.95f, 1.3f, 0.3f}),
+            vertexAt({2.0f, 1.5f, 0.4f}),
+            vertexAt({1.2f, 1.4f, 0.2f})));
+    const RecordingSink scene = singlePrototypeScene(triangles);
+    const BuildReport report = buildOrFail(scene, dir / "scene.ffs", smallOptions(kThreads));
+    EXPECT_GT(report.chunks, 2u);
+    expectSceneMatches(dir / "scene.ffs", scene, report);
+}
+
+// A counted cell whose only triangle stops in a cell above it must not become an empty chunk.
+TEST(SceneBuilderTest, CellWhoseTrianglesStopAboveItBecomesNoChunk) {
+    const fs::path dir = freshTestDir();
+    constexpr unsigned kThreads = 8;
+    const std::size_t clusterSize = chunkTriangles(kThreads) + chunkTriangles(kThreads) / 4;
+    std::vector<storage::PackedTriangle> triangles =
+            cluster(clusterSize, glm::vec3(0.0f), glm::vec3(0.9f), 1);
+    const auto far = cluster(clusterSize, glm::vec3(1.55f), glm::vec3(2.0f), 2);
+    triangles.insert(triangles.end(), far.begin(), far.end());
+    // Centroid in octant 7, sub-octant 0 ([1, 1.5]^3), 1.05 wide: stops at the octant-7 cell,
+    // which holds too many triangles to be a chunk itself.
+    triangles.push_back(packTriangle(
+            vertexAt({0.95f, 1.0f, 0.95f}),
+            vertexAt({2.0f, 1.2f, 1.0f}),
+            vertexAt({1.0f, 1.2f, 2.0f})));
+    const RecordingSink scene = singlePrototypeScene(triangles);
+    const BuildReport report = buildOrFail(scene, dir / "scene.ffs", smallOptions(kThreads));
+    EXPECT_GT(report.chunks, 2u);
+    expectSceneMatches(dir / "scene.ffs", scene, report);
+}
+
+// Clusters far denser than the scene's average: the first counting level cannot split them into
+// chunks, a finer one can.
+TEST(SceneBuilderTest, DenseClustersArePartitionedAtAFinerLevel) {
+    const fs::path dir = freshTestDir();
+    constexpr unsigned kThreads = 8;
+    const std::size_t clusterSize = chunkTriangles(kThreads) + chunkTriangles(kThreads) / 4;
+    std::vector<storage::PackedTriangle> triangles =
+            cluster(clusterSize, glm::vec3(0.0f), glm::vec3(0.05f), 1);
+    const auto far = cluster(clusterSize, glm::vec3(1.95f), glm::vec3(2.0f), 2);
+    triangles.insert(triangles.end(), far.begin(), far.end());
+    const RecordingSink scene = singlePrototypeScene(triangles);
+    const BuildReport report = buildOrFail(scene, dir / "scene.ffs", smallOptions(kThreads));
+    EXPECT_GT(report.chunks, 2u);
+    expectSceneMatches(dir / "scene.ffs", scene, report);
+}
+
+// ---- options ---------------------------------------------------------------------------------
+
+TEST(SceneBuilderTest, RejectsInvalidOptions) {
+    const fs::path dir = freshTestDir();
+    auto expectInvalid = [&](const BuildOptions& options, const std::string& what) {
+        Result<std::unique_ptr<SceneBuilder>> builder =
+                SceneBuilder::create(dir / "scene.ffs", options);
+        ASSERT_FALSE(builder.isOk()) << what;
+        EXPECT_EQ(builder.status().code(), ErrorCode::InvalidArgument) << what;
+        EXPECT_NE(builder.status().message().find(what), std::string::npos)
+                << builder.status().message();
+    };
+    BuildOptions options = smallOptions();
+    options.memoryBudgetBytes = SceneBuilder::kMinimumBudgetBytes - 1;
+    expectInvalid(options, "budget");
+    options.memoryBudgetBytes = 0;
+    expectInvalid(options, "budget");
+    for (std::uint32_t pageSize : {0u, 1000u, 4095u, 6000u, 65537u, 32u << 20}) {
+        options = smallOptions();
+        options.pageSize = pageSize;
+        expectInvalid(options, "page size");
+    }
+    for (int resolution : {-1, 0, 1, 65}) {
+        options = smallOptions();
+        options.hierarchy.bakeResolution = resolution;
+        expectInvalid(options, "bake resolution");
+    }
+    options = smallOptions();
+    options.hierarchy.cubeCost = 0.0f;
+    expectInvalid(options, "cube cost");
+    options = smallOptions();
+    options.hierarchy.largeTriangleTolerance = std::numeric_limits<float>::quiet_NaN();
+    expectInvalid(options, "tolerance");
+    EXPECT_TRUE(listDirectory(dir).empty());
+}
+
+// ---- failures and temporary files ------------------------------------------------------------
+
+TEST(SceneBuilderTest, EmptySceneFailsAndLeavesNothingBehind) {
+    const fs::path dir = freshTestDir();
+    RecordingSink noPrototypes;
+    RecordingSink noTriangles;
+    const PrototypeId id = noTriangles.addPrototype("empty").value();
+    ASSERT_TRUE(noTriangles.addInstance(id, glm::mat4(1.0f)).isOk());
+    RecordingSink onlyDropped;
+    const PrototypeId dropped = onlyDropped.addPrototype("flat").value();
+    const storage::PackedTriangle flat = packTriangle(
+            vertexAt(glm::vec3(0.0f)), vertexAt(glm::vec3(1.0f)), vertexAt(glm::vec3(2.0f)));
+    ASSERT_TRUE(onlyDropped.addTriangles(dropped, std::span(&flat, 1)).isOk());
+    ASSERT_TRUE(onlyDropped.addInstance(dropped, glm::mat4(1.0f)).isOk());
+
+    for (const RecordingSink* scene : {&noPrototypes, &noTriangles, &onlyDropped}) {
+        Result<std::unique_ptr<SceneBuilder>> builder =
+                SceneBuilder::create(dir / "scene.ffs", smallOptions());
+        ASSERT_TRUE(builder.isOk()) << builder.status().toString();
+        ASSERT_TRUE(replay(*scene, **builder).isOk());
+        Result<BuildReport> report = (*builder)->finish();
+        ASSERT_FALSE(report.isOk());
+        EXPECT_EQ(report.status().code(), ErrorCode::InvalidInput);
+        EXPECT_NE(report.status().message().find("no triangles"), std::string::npos)
+                << report.status().toString();
+        // "Temporary files are removed either way": already when finish() returns.
+        EXPECT_EQ(listDirectory(dir), std::vector<std::string>{});
+        builder.value().reset();
+        EXPECT_EQ(listDirectory(dir), std::vector<std::string>{});
+    }
+}
+
+TEST(SceneBuilderTest, FinishTwiceIsAnError) {
+    const fs::path dir = freshTestDir();
+    const RecordingSink scene =
+            singlePrototypeScene(cluster(10, glm::vec3(0.0f), glm::vec3(1.0f), 1));
+    Result<std::unique_ptr<SceneBuilder>> builder =
+            SceneBuilder::create(dir / "scene.ffs", smallOptions());
+    ASSERT_TRUE(builder.isOk());
+    ASSERT_TRUE(replay(scene, **builder).isOk());
+    ASSERT_TRUE((*builder)->finish().isOk());
+    EXPECT_EQ((*builder)->finish().status().code(), ErrorCode::InvalidArgument);
+    EXPECT_TRUE(fs::exists(dir / "scene.ffs"));
+}
+
+TEST(SceneBuilderTest, TemporaryDirectoryIsRemovedAfterSuccessAndFailure) {
+    const fs::path dir = freshTestDir();
+    const fs::path spill = dir / "spill";
+    fs::create_directories(spill);
+    fs::create_directories(dir / "out");
+    // Enough triangles that run files reach the disk (spill buffers are budget / 8).
+    const RecordingSink scene = generate("terrain:triangles=60000");
+    BuildOptions options = smallOptions(4);
+
+    // Success, temporary files beside the output.
+    buildOrFail(scene, dir / "out" / "beside.ffs", options);
+    EXPECT_EQ(listDirectory(dir / "out"), std::vector<std::string>{"beside.ffs"});
+
+    // Success, temporary files in their own directory.
+    options.tempDirectory = spill;
+    const BuildReport report = buildOrFail(scene, dir / "out" / "apart.ffs", options);
+    EXPECT_GT(report.spillBytes, 0u);
+    EXPECT_EQ(listDirectory(spill), std::vector<std::string>{});
+    EXPECT_EQ(listDirectory(dir / "out"), (std::vector<std::string>{"apart.ffs", "beside.ffs"}));
+
+    // Failure in finish(): triangles but no instance to draw them.
+    RecordingSink noInstances;
+    const PrototypeId id = noInstances.addPrototype("mesh").value();
+    ASSERT_TRUE(noInstances.addTriangles(id, scene.prototypes()[0].triangles).isOk());
+    EXPECT_FALSE(buildScene(noInstances, dir / "out" / "failed.ffs", options).isOk());
+    EXPECT_EQ(listDirectory(spill), std::vector<std::string>{});
+    EXPECT_EQ(listDirectory(dir / "out"), (std::vector<std::string>{"apart.ffs", "beside.ffs"}));
+
+    // A builder dropped before finish(), e.g. because its source failed half way.
+    {
+        Result<std::unique_ptr<SceneBuilder>> builder =
+                SceneBuilder::create(dir / "out" / "abandoned.ffs", options);
+        ASSERT_TRUE(builder.isOk());
+        ASSERT_TRUE(replay(scene, **builder).isOk());
+        EXPECT_FALSE(listDirectory(spill).empty()) << "run files should have reached the disk";
+    }
+    EXPECT_EQ(listDirectory(spill), std::vector<std::string>{});
+    EXPECT_EQ(listDirectory(dir / "out"), (std::vector<std::string>{"apart.ffs", "beside.ffs"}));
+}
+
+// Distinct instances must be usable at the same time (STYLE.md §6), also in one directory.
+TEST(SceneBuilderTest, TwoBuildersInOneDirectoryKeepTheirTemporaryFilesApart) {
+    const fs::path dir = freshTestDir();
+    const RecordingSink first =
+            singlePrototypeScene(cluster(50000, glm::vec3(0.0f), glm::vec3(1.0f), 1));
+    const RecordingSink second =
+            singlePrototypeScene(cluster(50000, glm::vec3(5.0f), glm::vec3(6.0f), 2));
+    const BuildOptions options = smallOptions(2);
+    Result<std::unique_ptr<SceneBuilder>> a = SceneBuilder::create(dir / "first.ffs", options);
+    Result<std::unique_ptr<SceneBuilder>> b = SceneBuilder::create(dir / "second.ffs", options);
+    ASSERT_TRUE(a.isOk() && b.isOk());
+    ASSERT_TRUE(replay(first, **a).isOk());
+    ASSERT_TRUE(replay(second, **b).isOk());
+    Result<BuildReport> reportA = (*a)->finish();
+    ASSERT_TRUE(reportA.isOk()) << reportA.status().toString();
+    Result<BuildReport> reportB = (*b)->finish();
+    ASSERT_TRUE(reportB.isOk()) << reportB.status().toString();
+    expectSceneMatches(dir / "first.ffs", first, *reportA);
+    expectSceneMatches(dir / "second.ffs", second, *reportB);
+    EXPECT_EQ(listDirectory(dir), (std::vector<std::string>{"first.ffs", "second.ffs"}));
+}
+
+} // namespace
+} // namespace ff::builder

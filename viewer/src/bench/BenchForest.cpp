@@ -1,0 +1,100 @@
+// Chamberlain et al. '96 §5.2: a forest made by recursively instancing the tree, 1 to 16,384
+// trees, rendered from one fixed viewpoint; frame time against scene size on log-log axes.
+
+#include "BenchSupport.h"
+#include "Benchmarks.h"
+
+#include <ff/runtime/OffscreenContext.h>
+
+#include <array>
+#include <cstdio>
+#include <fstream>
+
+namespace ff::viewer::bench {
+
+namespace {
+
+// Above this many triangles the full (brute-force) frame is not rendered but extrapolated from
+// the per-triangle cost measured at the largest rendered size (llvmpipe: ~2.5 M triangles/s).
+constexpr std::uint64_t kFullMeasuredLimit = 60'000'000;
+
+} // namespace
+
+Status runForest(const BenchOptions& options) {
+    std::filesystem::create_directories(options.outDir);
+    const std::filesystem::path work = options.workDir.empty() ? options.outDir / "scenes" : options.workDir;
+    std::filesystem::create_directories(work);
+    FF_ASSIGN_OR_RETURN(auto context, runtime::OffscreenContext::create());
+
+    // One viewpoint for every forest, relative to the corner where the forest starts: outside
+    // the corner tree, looking diagonally into the forest and over it to the horizon. The near
+    // field is the same for every size; larger forests add trees ever further away (the
+    // setting of the paper's Plate 5 and Fig. 5).
+    auto cornerCamera = [](const storage::SceneFile& file) {
+        const glm::vec3 corner(file.header().boundsMin[0], 0.0f, file.header().boundsMin[2]);
+        runtime::Camera c = runtime::Camera::lookAt(corner + glm::vec3(-12.0f, 18.0f, -12.0f),
+                                                    corner + glm::vec3(30.0f, 2.0f, 30.0f), {0, 1, 0}, glm::radians(60.0f));
+        c.zNear = 0.5f;
+        c.zFar = 20000.0f;
+        return c;
+    };
+    // The paper's image size (Table 2) and a common window size.
+    const std::array<std::array<int, 2>, 2> sizes = {{{124, 124}, {640, 480}}};
+
+    CsvTable table({"width", "height", "trees", "triangles", "full_ms", "full_measured", "hierarchical_ms", "speedup", "triangles_drawn",
+                    "cubes_drawn", "nodes_visited", "file_bytes"});
+    std::array<double, 2> fullMsPerTriangle{};
+    const std::uint64_t maxTrees = options.quick ? 256 : 16384;
+    for (std::uint64_t trees = 1; trees <= maxTrees; trees *= 4) {
+        std::fprintf(stderr, "forest: %llu trees\n", static_cast<unsigned long long>(trees));
+        const std::filesystem::path scene = work / ("forest-" + std::to_string(trees) + ".ffs");
+        FF_RETURN_IF_ERROR(buildGenerated("forest:trees=" + std::to_string(trees), scene));
+        FF_ASSIGN_OR_RETURN(auto file, storage::SceneFile::open(scene));
+        FF_ASSIGN_OR_RETURN(auto renderer, runtime::FrameRenderer::create(*file));
+        const std::uint64_t triangles = file->header().instancedTriangles;
+        const runtime::Camera camera = cornerCamera(*file);
+
+        for (std::size_t si = 0; si < sizes.size(); ++si) {
+            const int width = sizes[si][0];
+            const int height = sizes[si][1];
+            runtime::SelectionOptions hierarchical;
+            FF_ASSIGN_OR_RETURN(const runtime::Frame hier,
+                                timeFrames(*renderer, camera, hierarchical, width, height, 1, options.timedFrames));
+            double fullMs = 0.0;
+            const bool measured = triangles <= kFullMeasuredLimit;
+            if (measured) {
+                runtime::SelectionOptions full;
+                full.method = runtime::Method::Full;
+                FF_ASSIGN_OR_RETURN(const runtime::Frame frame, timeFrames(*renderer, camera, full, width, height, 1, 1));
+                fullMs = frame.stats.totalMs;
+                fullMsPerTriangle[si] = fullMs / static_cast<double>(triangles);
+            } else {
+                fullMs = fullMsPerTriangle[si] * static_cast<double>(triangles);
+            }
+            table.addRow({std::to_string(width), std::to_string(height), std::to_string(trees), std::to_string(triangles),
+                          formatNumber(fullMs), measured ? "1" : "0", formatNumber(hier.stats.totalMs),
+                          formatNumber(fullMs / hier.stats.totalMs, 1), std::to_string(hier.stats.trianglesDrawn),
+                          std::to_string(hier.stats.cubesDrawn), std::to_string(hier.stats.nodesVisited),
+                          std::to_string(file->pageCount() * file->pageSize())});
+        }
+        renderer.reset();
+        file.reset();
+        std::filesystem::remove(scene);
+    }
+    const std::filesystem::path csv = options.outDir / "forest.csv";
+    FF_RETURN_IF_ERROR(table.write(csv));
+    FF_RETURN_IF_ERROR(plotCharts("forest", csv, options.outDir));
+    std::ofstream md(options.outDir / "forest.md");
+    md << "# The recursively instanced forest\n\n"
+       << "`farfield bench forest`: forests of 1 to " << maxTrees << " trees (one ~52.6k-triangle prototype plus one "
+       << "transform per tree), one viewpoint fixed at the forest's corner looking diagonally into it and over it to the horizon, at 124x124 (the paper's image size) and 640x480, epsilon = 1. "
+       << "Full (brute force) frames are measured up to " << kFullMeasuredLimit / 1'000'000
+       << " M triangles and extrapolated above that from the measured per-triangle cost (full_measured = 0). "
+       << "Chamberlain et al. report an 88x speedup at 16,384 trees (859 M polygons).\n\n"
+       << table.markdown() << "\n![frame time against scene size](forest.png)\n";
+    if (options.workDir.empty())
+        std::filesystem::remove_all(work);
+    return Status::ok();
+}
+
+} // namespace ff::viewer::bench

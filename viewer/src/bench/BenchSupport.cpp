@@ -1,0 +1,111 @@
+#include "BenchSupport.h"
+
+#include <ff/builder/Generators.h>
+#include <ff/builder/SceneBuilder.h>
+
+#include <algorithm>
+#include <cstdio>
+#include <fstream>
+#include <sys/wait.h>
+#include <unistd.h>
+
+namespace ff::viewer::bench {
+
+Status CsvTable::write(const std::filesystem::path& path) const {
+    std::ofstream out(path);
+    auto line = [&out](const std::vector<std::string>& cells) {
+        for (std::size_t i = 0; i < cells.size(); ++i)
+            out << (i ? "," : "") << cells[i];
+        out << "\n";
+    };
+    line(mColumns);
+    for (const auto& row : mRows)
+        line(row);
+    if (!out)
+        return Status(ErrorCode::IoError, "cannot write " + path.string());
+    return Status::ok();
+}
+
+std::string CsvTable::markdown() const {
+    std::string text = "|";
+    for (const std::string& c : mColumns)
+        text += " " + c + " |";
+    text += "\n|";
+    for (std::size_t i = 0; i < mColumns.size(); ++i)
+        text += "---|";
+    text += "\n";
+    for (const auto& row : mRows) {
+        text += "|";
+        for (const std::string& c : row)
+            text += " " + c + " |";
+        text += "\n";
+    }
+    return text;
+}
+
+std::string formatNumber(double value, int decimals) {
+    char text[64];
+    std::snprintf(text, sizeof(text), "%.*f", decimals, value);
+    return text;
+}
+
+Result<runtime::Frame> timeFrames(
+        runtime::FrameRenderer& renderer,
+        const runtime::Camera& camera,
+        const runtime::SelectionOptions& selection,
+        int width,
+        int height,
+        int warmup,
+        int timed) {
+    for (int i = 0; i < warmup; ++i)
+        FF_RETURN_IF_ERROR(renderer.render(camera, selection, width, height).status());
+    std::vector<double> total, select, draw;
+    Result<runtime::Frame> frame = Status(ErrorCode::InvalidArgument, "no timed frame");
+    for (int i = 0; i < std::max(timed, 1); ++i) {
+        frame = renderer.render(camera, selection, width, height);
+        if (!frame)
+            return frame;
+        total.push_back(frame->stats.totalMs);
+        select.push_back(frame->stats.selectMs);
+        draw.push_back(frame->stats.drawMs);
+    }
+    auto median = [](std::vector<double> v) {
+        std::sort(v.begin(), v.end());
+        return v[v.size() / 2];
+    };
+    frame->stats.totalMs = median(total);
+    frame->stats.selectMs = median(select);
+    frame->stats.drawMs = median(draw);
+    return frame;
+}
+
+Status buildGenerated(const std::string& spec, const std::filesystem::path& path) {
+    builder::BuildOptions options;
+    options.memoryBudgetBytes = 2ull << 30;
+    FF_ASSIGN_OR_RETURN(auto sceneBuilder, builder::SceneBuilder::create(path, options));
+    FF_ASSIGN_OR_RETURN(const builder::GeneratorSpec parsed, builder::parseGeneratorSpec(spec));
+    FF_RETURN_IF_ERROR(builder::runGenerator(parsed, *sceneBuilder).status());
+    return sceneBuilder->finish().status();
+}
+
+Status plotCharts(const std::string& kind, const std::filesystem::path& csv, const std::filesystem::path& outDir) {
+    const std::filesystem::path script = std::filesystem::path(FF_SOURCE_DIR) / "scripts" / "plot_bench.py";
+    if (!std::filesystem::exists(script))
+        return Status(ErrorCode::NotFound, "chart script " + script.string() + " is missing");
+    const pid_t pid = fork();
+    if (pid < 0)
+        return Status(ErrorCode::IoError, "cannot start the chart script");
+    if (pid == 0) {
+        // Debian's interpreter, where python3-matplotlib lives (a user's PATH may hold another).
+        execl("/usr/bin/python3", "python3", script.c_str(), kind.c_str(), csv.c_str(), outDir.c_str(),
+              static_cast<char*>(nullptr));
+        _exit(127);
+    }
+    int status = 0;
+    waitpid(pid, &status, 0);
+    if (!WIFEXITED(status) || WEXITSTATUS(status) != 0)
+        return Status(ErrorCode::Internal, "chart script failed (is python3-matplotlib installed?)");
+    return Status::ok();
+}
+
+} // namespace ff::viewer::bench

@@ -1,0 +1,48 @@
+#pragma once
+
+#include <ff/runtime/Camera.h>
+#include <ff/runtime/FrameRenderer.h>
+#include <ff/storage/Status.h>
+
+#include <cstdint>
+#include <filesystem>
+#include <string>
+#include <vector>
+
+namespace ff::viewer::bench {
+
+/** A CSV table built row by row; cells are written as given. */
+class CsvTable {
+public:
+    explicit CsvTable(std::vector<std::string> columns) : mColumns(std::move(columns)) {}
+    void addRow(std::vector<std::string> cells) { mRows.push_back(std::move(cells)); }
+    [[nodiscard]] Status write(const std::filesystem::path& path) const;
+    /** The same table as Markdown, for reports. */
+    std::string markdown() const;
+
+private:
+    std::vector<std::string> mColumns;
+    std::vector<std::vector<std::string>> mRows;
+};
+
+std::string formatNumber(double value, int decimals = 2);
+
+/** Renders the view `warmup` times untimed, then `timed` times; returns the last frame with
+ *  the median total/select/draw milliseconds in its stats. */
+[[nodiscard]] Result<runtime::Frame> timeFrames(
+        runtime::FrameRenderer& renderer,
+        const runtime::Camera& camera,
+        const runtime::SelectionOptions& selection,
+        int width,
+        int height,
+        int warmup,
+        int timed);
+
+/** Builds a generator's scene (e.g. "forest:trees=16") into `path` with a 2 GiB budget. */
+[[nodiscard]] Status buildGenerated(const std::string& spec, const std::filesystem::path& path);
+
+/** Runs scripts/plot_bench.py KIND CSV OUTDIR with Debian's matplotlib; a missing script or
+ *  interpreter is an error naming what is missing. */
+[[nodiscard]] Status plotCharts(const std::string& kind, const std::filesystem::path& csv, const std::filesystem::path& outDir);
+
+} // namespace ff::viewer::bench
