@@ -2,9 +2,8 @@
 
 #include "ImageOutput.h"
 
-#include <gtest/gtest.h>
-
 #include <fcntl.h>
+#include <gtest/gtest.h>
 #include <spawn.h>
 #include <sys/resource.h>
 #include <sys/wait.h>
@@ -70,8 +69,10 @@ ProcessResult runFarfield(const std::vector<std::string>& args, const fs::path& 
     posix_spawn_file_actions_t actions;
     posix_spawn_file_actions_init(&actions);
     posix_spawn_file_actions_addopen(&actions, 0, "/dev/null", O_RDONLY, 0);
-    posix_spawn_file_actions_addopen(&actions, 1, outPath.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
-    posix_spawn_file_actions_addopen(&actions, 2, errPath.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+    posix_spawn_file_actions_addopen(
+            &actions, 1, outPath.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+    posix_spawn_file_actions_addopen(
+            &actions, 2, errPath.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
 
     const auto start = std::chrono::steady_clock::now();
     pid_t pid = 0;
@@ -87,7 +88,8 @@ ProcessResult runFarfield(const std::vector<std::string>& args, const fs::path& 
     do {
         waited = wait4(pid, &status, 0, &usage);
     } while (waited < 0 && errno == EINTR);
-    result.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    result.seconds =
+            std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     if (waited != pid) {
         ADD_FAILURE() << "wait4 failed: " << std::strerror(errno);
         return result;
@@ -151,7 +153,9 @@ std::vector<unsigned char> readBytes(const fs::path& path) {
 
 void writeBytes(const fs::path& path, const std::vector<unsigned char>& bytes) {
     std::ofstream out(path, std::ios::binary | std::ios::trunc);
-    out.write(reinterpret_cast<const char*>(bytes.data()), static_cast<std::streamsize>(bytes.size()));
+    out.write(
+            reinterpret_cast<const char*>(bytes.data()),
+            static_cast<std::streamsize>(bytes.size()));
 }
 
 } // namespace ff::viewer::test

@@ -18,15 +18,15 @@ namespace ff::viewer::test {
 
 /** How a `farfield` child ended. */
 struct ProcessResult {
-    bool exited = false;      ///< WIFEXITED
-    int exitCode = -1;        ///< WEXITSTATUS if exited
-    bool signaled = false;    ///< WIFSIGNALED (a crash or abort)
-    int signal = 0;           ///< WTERMSIG if signaled
+    bool exited = false;           ///< WIFEXITED
+    int exitCode = -1;             ///< WEXITSTATUS if exited
+    bool signaled = false;         ///< WIFSIGNALED (a crash or abort)
+    int signal = 0;                ///< WTERMSIG if signaled
     std::uint64_t maxRssBytes = 0; ///< ru_maxrss of the child (from wait4)
-    double seconds = 0.0;     ///< wall time
-    std::string out;          ///< captured stdout
-    std::string err;          ///< captured stderr
-    std::string command;      ///< the argument list, for failure messages
+    double seconds = 0.0;          ///< wall time
+    std::string out;               ///< captured stdout
+    std::string err;               ///< captured stderr
+    std::string command;           ///< the argument list, for failure messages
 
     /** "farfield build ...: exit 1\nstderr: ..." for assertion messages. */
     std::string describe() const;
@@ -37,7 +37,8 @@ struct ProcessResult {
  * `scratch`, waits for it. The child inherits the environment. Aborts the test binary only if
  * the process cannot be spawned at all.
  */
-ProcessResult runFarfield(const std::vector<std::string>& args, const std::filesystem::path& scratch);
+ProcessResult
+runFarfield(const std::vector<std::string>& args, const std::filesystem::path& scratch);
 
 /** An empty directory FF_TEST_TMP_DIR/<suite>.<test> for the running test (removed first). */
 std::filesystem::path freshTestDir();

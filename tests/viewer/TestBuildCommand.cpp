@@ -25,18 +25,26 @@ constexpr std::uint64_t kMiB = 1024 * 1024;
 /** `farfield build -q <args...> -o <output> --report <report>`; returns the process result. */
 ProcessResult build(const fs::path& dir, std::vector<std::string> args, const fs::path& output) {
     args.insert(args.begin(), {"build", "-q"});
-    args.insert(args.end(), {"-o", output.string(), "--report", (dir / (output.stem().string() + ".json")).string()});
+    args.insert(
+            args.end(),
+            {"-o",
+             output.string(),
+             "--report",
+             (dir / (output.stem().string() + ".json")).string()});
     return runFarfield(args, dir);
 }
 
-bool exitedWith(const ProcessResult& r, int code) { return r.exited && r.exitCode == code; }
+bool exitedWith(const ProcessResult& r, int code) {
+    return r.exited && r.exitCode == code;
+}
 
 /** No leftover temporary files (.tmp-<pid> of the writer, .farfield-build-* spill folders). */
 std::vector<std::string> leftovers(const fs::path& dir) {
     std::vector<std::string> out;
     for (const auto& entry : fs::directory_iterator(dir)) {
         const std::string name = entry.path().filename().string();
-        if (name.find(".tmp") != std::string::npos || name.find(".farfield-build") != std::string::npos)
+        if (name.find(".tmp") != std::string::npos ||
+            name.find(".farfield-build") != std::string::npos)
             out.push_back(name);
     }
     return out;
@@ -57,8 +65,10 @@ TEST(BuildCommandTest, ForestOf16384TreesIsOneTreePlusInstances) {
     const ProcessResult built = build(dir, {"--generate", "forest:trees=16384"}, forest);
     ASSERT_TRUE(exitedWith(built, 0)) << built.describe();
     RecordProperty("build_seconds", std::to_string(built.seconds));
-    std::printf("forest:trees=16384 built in %.1f s (peak RSS %llu MiB)\n", built.seconds,
-                static_cast<unsigned long long>(built.maxRssBytes / kMiB));
+    std::printf(
+            "forest:trees=16384 built in %.1f s (peak RSS %llu MiB)\n",
+            built.seconds,
+            static_cast<unsigned long long>(built.maxRssBytes / kMiB));
     const json report = readJsonFile(dir / "forest.json");
     ASSERT_TRUE(report.is_object());
     EXPECT_EQ(report.at("prototypes").get<std::uint64_t>(), 1u);
@@ -74,7 +84,14 @@ TEST(BuildCommandTest, ForestOf16384TreesIsOneTreePlusInstances) {
 
     const fs::path png = dir / "forest.png";
     const ProcessResult rendered = runFarfield(
-            {"render", forest.string(), "-o", png.string(), "--size", "160x120", "--distance", "3",
+            {"render",
+             forest.string(),
+             "-o",
+             png.string(),
+             "--size",
+             "160x120",
+             "--distance",
+             "3",
              "--coverage-alpha"},
             dir);
     ASSERT_TRUE(exitedWith(rendered, 0)) << rendered.describe();
@@ -92,13 +109,15 @@ TEST(BuildCommandTest, TerrainEightTimesTheBudgetBuildsWithinIt) {
     const fs::path dir = freshTestDir();
     constexpr std::uint64_t kBudget = 16 * kMiB;
     const fs::path scene = dir / "terrain.ffs";
-    const ProcessResult built =
-            build(dir, {"--generate", "terrain:triangles=2300000", "--memory-budget", "16MiB"}, scene);
+    const ProcessResult built = build(
+            dir, {"--generate", "terrain:triangles=2300000", "--memory-budget", "16MiB"}, scene);
     ASSERT_TRUE(exitedWith(built, 0)) << built.describe();
     RecordProperty("build_seconds", std::to_string(built.seconds));
     RecordProperty("max_rss_bytes", std::to_string(built.maxRssBytes));
-    std::printf("terrain:triangles=2300000 at 16 MiB built in %.1f s, ru_maxrss %llu MiB\n", built.seconds,
-                static_cast<unsigned long long>(built.maxRssBytes / kMiB));
+    std::printf(
+            "terrain:triangles=2300000 at 16 MiB built in %.1f s, ru_maxrss %llu MiB\n",
+            built.seconds,
+            static_cast<unsigned long long>(built.maxRssBytes / kMiB));
     const json report = readJsonFile(dir / "terrain.json");
     ASSERT_TRUE(report.is_object());
     // 60 bytes per PackedTriangle: the input alone is more than 8 budgets.
@@ -131,7 +150,8 @@ TEST(BuildCommandTest, SameInputGivesByteIdenticalFiles) {
         const std::vector<unsigned char> bytesB = readBytes(b);
         ASSERT_EQ(bytesA.size(), bytesB.size()) << inputs[i][0];
         std::size_t firstDifference = 0;
-        while (firstDifference < bytesA.size() && bytesA[firstDifference] == bytesB[firstDifference])
+        while (firstDifference < bytesA.size() &&
+               bytesA[firstDifference] == bytesB[firstDifference])
             ++firstDifference;
         EXPECT_EQ(firstDifference, bytesA.size())
                 << inputs[i][0] << ": first difference at byte " << firstDifference;
@@ -202,13 +222,22 @@ TEST(BuildCommandTest, EveryInvalidGltfIsRefusedCleanlyOrBuildsAValidFile) {
 
 TEST(BuildCommandTest, TruncatedGlbIsRefused) {
     const fs::path dir = freshTestDir();
-    const std::vector<unsigned char> glb = readBytes(kData / "static/CesiumMilkTruck/glTF-Binary/CesiumMilkTruck.glb");
+    const std::vector<unsigned char> glb =
+            readBytes(kData / "static/CesiumMilkTruck/glTF-Binary/CesiumMilkTruck.glb");
     ASSERT_GT(glb.size(), 1000u);
-    for (const std::size_t size : {std::size_t{0}, std::size_t{11}, std::size_t{20}, std::size_t{100}, glb.size() / 2,
-                                   glb.size() - 1}) {
+    for (const std::size_t size :
+         {std::size_t{0},
+          std::size_t{11},
+          std::size_t{20},
+          std::size_t{100},
+          glb.size() / 2,
+          glb.size() - 1}) {
         SCOPED_TRACE("truncated to " + std::to_string(size) + " bytes");
         const fs::path truncated = dir / "truncated.glb";
-        writeBytes(truncated, std::vector<unsigned char>(glb.begin(), glb.begin() + static_cast<std::ptrdiff_t>(size)));
+        writeBytes(
+                truncated,
+                std::vector<unsigned char>(
+                        glb.begin(), glb.begin() + static_cast<std::ptrdiff_t>(size)));
         const ProcessResult r = build(dir, {truncated.string()}, dir / "out.ffs");
         EXPECT_TRUE(exitedWith(r, 1)) << r.describe();
         EXPECT_EQ(r.err.rfind("farfield build: ", 0), 0u) << r.describe();
@@ -227,7 +256,8 @@ TEST(BuildCommandTest, MissingOutputDirectoryIsAnErrorAndCreatesNothing) {
 
 TEST(BuildCommandTest, MemoryBudgetBelowTheMinimumIsRefused) {
     const fs::path dir = freshTestDir();
-    const ProcessResult r = build(dir, {"--generate", "forest:trees=1", "--memory-budget", "1MiB"}, dir / "x.ffs");
+    const ProcessResult r =
+            build(dir, {"--generate", "forest:trees=1", "--memory-budget", "1MiB"}, dir / "x.ffs");
     EXPECT_TRUE(exitedWith(r, 2)) << r.describe();
     EXPECT_NE(r.err.find("--memory-budget"), std::string::npos) << r.describe();
     EXPECT_NE(r.err.find("minimum"), std::string::npos) << r.describe();
@@ -250,7 +280,8 @@ TEST(BuildCommandTest, BadGeneratorSpecsExitWithUsageErrors) {
         EXPECT_NE(r.err.find(message), std::string::npos) << r.describe();
         EXPECT_FALSE(fs::exists(dir / "x.ffs"));
     }
-    const ProcessResult both = build(dir, {"--generate", "forest:trees=1", "input.gltf"}, dir / "x.ffs");
+    const ProcessResult both =
+            build(dir, {"--generate", "forest:trees=1", "input.gltf"}, dir / "x.ffs");
     EXPECT_TRUE(exitedWith(both, 2)) << both.describe();
     const ProcessResult neither = build(dir, {}, dir / "x.ffs");
     EXPECT_TRUE(exitedWith(neither, 2)) << neither.describe();
@@ -263,13 +294,42 @@ TEST(CliHelpTest, EveryVerbDocumentsItsFlags) {
     const fs::path dir = freshTestDir();
     const std::vector<std::pair<std::string, std::vector<std::string>>> verbs = {
             {"build",
-             {"--generate", "--output", "--memory-budget", "--page-size", "--threads", "--bake-resolution",
-              "--bake-inner", "--cube-cost", "--large-triangle-tolerance", "--max-depth", "--report", "--temp-dir",
-              "--quiet", "forest", "terrain", "molecule", "blinds"}},
+             {"--generate",
+              "--output",
+              "--memory-budget",
+              "--page-size",
+              "--threads",
+              "--bake-resolution",
+              "--bake-inner",
+              "--cube-cost",
+              "--large-triangle-tolerance",
+              "--max-depth",
+              "--report",
+              "--temp-dir",
+              "--quiet",
+              "forest",
+              "terrain",
+              "molecule",
+              "blinds"}},
             {"render",
-             {"--output", "--size", "--epsilon", "--method", "--supersample", "--frames", "--stats", "--background",
-              "--gpu-budget", "--coverage-alpha", "--camera", "--eye", "--target", "--up", "--fov", "--distance",
-              "--azimuth", "--elevation"}},
+             {"--output",
+              "--size",
+              "--epsilon",
+              "--method",
+              "--supersample",
+              "--frames",
+              "--stats",
+              "--background",
+              "--gpu-budget",
+              "--coverage-alpha",
+              "--camera",
+              "--eye",
+              "--target",
+              "--up",
+              "--fov",
+              "--distance",
+              "--azimuth",
+              "--elevation"}},
             {"check", {"--json"}},
             {"bench", {"--help"}},
     };
@@ -278,12 +338,14 @@ TEST(CliHelpTest, EveryVerbDocumentsItsFlags) {
         EXPECT_TRUE(exitedWith(r, 0)) << r.describe();
         EXPECT_NE(r.out.find("Usage: farfield " + verb), std::string::npos) << r.describe();
         for (const std::string& flag : flags)
-            EXPECT_NE(r.out.find(flag), std::string::npos) << verb << " --help does not mention " << flag;
+            EXPECT_NE(r.out.find(flag), std::string::npos)
+                    << verb << " --help does not mention " << flag;
     }
     const ProcessResult top = runFarfield({"--help"}, dir);
     EXPECT_TRUE(exitedWith(top, 0)) << top.describe();
     for (const auto& verb : verbs)
-        EXPECT_NE(top.out.find(verb.first), std::string::npos) << "farfield --help does not list " << verb.first;
+        EXPECT_NE(top.out.find(verb.first), std::string::npos)
+                << "farfield --help does not list " << verb.first;
     const ProcessResult none = runFarfield({}, dir);
     EXPECT_TRUE(none.exited && none.exitCode != 0) << none.describe();
 }

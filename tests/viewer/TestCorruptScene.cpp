@@ -25,7 +25,9 @@ constexpr std::size_t kPageSize = 4096;
 std::set<std::uint64_t> pagesNamed(const std::string& text) {
     std::set<std::uint64_t> pages;
     static const std::regex kPage("page ([0-9]+)");
-    for (auto it = std::sregex_iterator(text.begin(), text.end(), kPage); it != std::sregex_iterator(); ++it)
+    for (auto it = std::sregex_iterator(text.begin(), text.end(), kPage);
+         it != std::sregex_iterator();
+         ++it)
         pages.insert(std::stoull((*it)[1].str()));
     return pages;
 }
@@ -34,8 +36,16 @@ std::set<std::uint64_t> pagesNamed(const std::string& text) {
 fs::path buildSmallScene(const fs::path& dir, json& report) {
     const fs::path scene = dir / "scene.ffs";
     const ProcessResult built = runFarfield(
-            {"build", "-q", "--generate", "molecule:spheres=16,triangles_per_sphere=300", "--page-size", "4KiB", "-o",
-             scene.string(), "--report", (dir / "report.json").string()},
+            {"build",
+             "-q",
+             "--generate",
+             "molecule:spheres=16,triangles_per_sphere=300",
+             "--page-size",
+             "4KiB",
+             "-o",
+             scene.string(),
+             "--report",
+             (dir / "report.json").string()},
             dir);
     EXPECT_TRUE(built.exited && built.exitCode == 0) << built.describe();
     report = readJsonFile(dir / "report.json");
@@ -107,7 +117,10 @@ TEST(CorruptSceneTest, TruncationAtEveryPageBoundaryIsRefused) {
     sizes.push_back(original.size() - 1);
     for (const std::size_t size : sizes) {
         SCOPED_TRACE("truncated to " + std::to_string(size) + " bytes");
-        writeBytes(truncated, std::vector<unsigned char>(original.begin(), original.begin() + static_cast<std::ptrdiff_t>(size)));
+        writeBytes(
+                truncated,
+                std::vector<unsigned char>(
+                        original.begin(), original.begin() + static_cast<std::ptrdiff_t>(size)));
         // The first page not wholly present is named; an empty or headerless file is page 0.
         expectRefused(truncated, dir, size / kPageSize);
     }

@@ -18,14 +18,18 @@ namespace {
 namespace fs = std::filesystem;
 using json = nlohmann::json;
 
-bool exitedWith(const ProcessResult& r, int code) { return r.exited && r.exitCode == code; }
+bool exitedWith(const ProcessResult& r, int code) {
+    return r.exited && r.exitCode == code;
+}
 
 std::string base64(const std::vector<unsigned char>& bytes) {
-    static constexpr char kAlphabet[] = "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
+    static constexpr char kAlphabet[] =
+            "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
     std::string out;
     std::size_t i = 0;
     for (; i + 2 < bytes.size(); i += 3) {
-        const std::uint32_t v = (std::uint32_t{bytes[i]} << 16) | (std::uint32_t{bytes[i + 1]} << 8) | bytes[i + 2];
+        const std::uint32_t v =
+                (std::uint32_t{bytes[i]} << 16) | (std::uint32_t{bytes[i + 1]} << 8) | bytes[i + 2];
         for (int shift = 18; shift >= 0; shift -= 6)
             out += kAlphabet[(v >> shift) & 63];
     }
@@ -67,9 +71,12 @@ json cameraGltf() {
               {{"camera", 0}, {"translation", {3.5, 0.5, 1.2}}}}},
             {"cameras",
              {{{"type", "perspective"},
-               {"perspective", {{"yfov", 0.8}, {"znear", 0.05}, {"zfar", 100.0}, {"aspectRatio", 4.0 / 3.0}}}}}},
+               {"perspective",
+                {{"yfov", 0.8}, {"znear", 0.05}, {"zfar", 100.0}, {"aspectRatio", 4.0 / 3.0}}}}}},
             {"meshes", {{{"primitives", {{{"attributes", {{"POSITION", 0}}}, {"material", 0}}}}}}},
-            {"materials", {{{"pbrMetallicRoughness", {{"baseColorFactor", {0.9, 0.3, 0.1, 1.0}}}}, {"doubleSided", true}}}},
+            {"materials",
+             {{{"pbrMetallicRoughness", {{"baseColorFactor", {0.9, 0.3, 0.1, 1.0}}}},
+               {"doubleSided", true}}}},
             {"accessors",
              {{{"bufferView", 0},
                {"componentType", 5126},
@@ -79,7 +86,8 @@ json cameraGltf() {
                {"max", {1, 1, 0}}}}},
             {"bufferViews", {{{"buffer", 0}, {"byteOffset", 0}, {"byteLength", buffer.size()}}}},
             {"buffers",
-             {{{"byteLength", buffer.size()}, {"uri", "data:application/octet-stream;base64," + base64(buffer)}}}}};
+             {{{"byteLength", buffer.size()},
+               {"uri", "data:application/octet-stream;base64," + base64(buffer)}}}}};
 }
 
 TEST(RenderCommandTest, GltfCameraRendersItsOwnView) {
@@ -87,13 +95,20 @@ TEST(RenderCommandTest, GltfCameraRendersItsOwnView) {
     const fs::path gltf = dir / "camera.gltf";
     std::ofstream(gltf) << cameraGltf().dump(1);
     const fs::path scene = dir / "camera.ffs";
-    const ProcessResult built = runFarfield({"build", "-q", gltf.string(), "-o", scene.string()}, dir);
+    const ProcessResult built =
+            runFarfield({"build", "-q", gltf.string(), "-o", scene.string()}, dir);
     ASSERT_TRUE(exitedWith(built, 0)) << built.describe();
 
     const auto render = [&](const std::string& name, std::vector<std::string> flags) {
         const fs::path png = dir / (name + ".png");
-        std::vector<std::string> args = {"render", scene.string(), "-o", png.string(), "--size", "160x120",
-                                         "--coverage-alpha"};
+        std::vector<std::string> args = {
+                "render",
+                scene.string(),
+                "-o",
+                png.string(),
+                "--size",
+                "160x120",
+                "--coverage-alpha"};
         args.insert(args.end(), flags.begin(), flags.end());
         const ProcessResult r = runFarfield(args, dir);
         EXPECT_TRUE(exitedWith(r, 0)) << r.describe();
@@ -118,18 +133,21 @@ TEST(RenderCommandTest, CameraIndexBeyondTheSceneIsAClearError) {
     const ProcessResult built =
             runFarfield({"build", "-q", "--generate", "forest:trees=1", "-o", scene.string()}, dir);
     ASSERT_TRUE(exitedWith(built, 0)) << built.describe();
-    const ProcessResult r = runFarfield({"render", scene.string(), "--camera", "gltf:5", "--size", "32x24"}, dir);
+    const ProcessResult r =
+            runFarfield({"render", scene.string(), "--camera", "gltf:5", "--size", "32x24"}, dir);
     EXPECT_TRUE(exitedWith(r, 1)) << r.describe();
     EXPECT_NE(r.err.find("gltf:5"), std::string::npos) << r.describe();
     EXPECT_NE(r.err.find("0 glTF camera"), std::string::npos) << r.describe();
-    const ProcessResult malformed = runFarfield({"render", scene.string(), "--camera", "orbit:1"}, dir);
+    const ProcessResult malformed =
+            runFarfield({"render", scene.string(), "--camera", "orbit:1"}, dir);
     EXPECT_TRUE(exitedWith(malformed, 2)) << malformed.describe();
 }
 
 TEST(RenderCommandTest, MissingSceneFileIsAClearError) {
     const fs::path dir = freshTestDir();
     const fs::path missing = dir / "missing.ffs";
-    const ProcessResult r = runFarfield({"render", missing.string(), "-o", (dir / "x.png").string()}, dir);
+    const ProcessResult r =
+            runFarfield({"render", missing.string(), "-o", (dir / "x.png").string()}, dir);
     EXPECT_TRUE(exitedWith(r, 1)) << r.describe();
     EXPECT_EQ(r.err.rfind("farfield render: ", 0), 0u) << r.describe();
     EXPECT_NE(r.err.find(missing.string()), std::string::npos) << r.describe();

@@ -60,7 +60,12 @@ std::string testName(const std::string& path) {
 /** Builds `model` into dir/scene.ffs with a report; fails the test if the build fails. */
 json buildModel(const std::string& model, const fs::path& dir) {
     const ProcessResult built = runFarfield(
-            {"build", "-q", (kData / model).string(), "-o", (dir / "scene.ffs").string(), "--report",
+            {"build",
+             "-q",
+             (kData / model).string(),
+             "-o",
+             (dir / "scene.ffs").string(),
+             "--report",
              (dir / "report.json").string()},
             dir);
     EXPECT_TRUE(built.exited && built.exitCode == 0) << built.describe();
@@ -164,9 +169,11 @@ TEST_P(SharedModelTest, EpsilonZeroRendersExactlyLikeFull) {
         // Opaque triangles only: coverage is all or nothing. That also makes the PNG round trip
         // (OIIO un-premultiplies on write, premultiplies on read) exact for this comparison.
         for (std::size_t i = 3; i < images[0].rgba.size(); i += 4)
-            ASSERT_TRUE(images[0].rgba[i] == 0 || images[0].rgba[i] == 255) << "partial coverage at " << i / 4;
+            ASSERT_TRUE(images[0].rgba[i] == 0 || images[0].rgba[i] == 255)
+                    << "partial coverage at " << i / 4;
         EXPECT_GT(coveredPixels(images[0]), 0u) << view.name << " view shows only background";
-        EXPECT_EQ(differingPixels(images[0], images[1]), 0u) << view.name << " view: ε = 0 and full differ";
+        EXPECT_EQ(differingPixels(images[0], images[1]), 0u)
+                << view.name << " view: ε = 0 and full differ";
     }
 }
 

@@ -75,8 +75,10 @@ int runBuild(const BuildArgs& args) {
     const std::filesystem::path outputDirectory = std::filesystem::path(args.output).parent_path();
     std::error_code directoryError;
     if (!outputDirectory.empty() && !std::filesystem::is_directory(outputDirectory, directoryError))
-        return reportError("build", Status(ErrorCode::NotFound, "output directory " + outputDirectory.string() +
-                                                                        " does not exist"));
+        return reportError(
+                "build",
+                Status(ErrorCode::NotFound,
+                       "output directory " + outputDirectory.string() + " does not exist"));
     auto sceneBuilder = builder::SceneBuilder::create(args.output, options);
     if (!sceneBuilder)
         return reportError("build", sceneBuilder.status());
