@@ -174,8 +174,10 @@ Result<storage::NodeRecord> commitSubtree(storage::SceneWriter& writer, EncodedS
     relocateRecord(root, geometryBase, nodeBase);
     if (subtree.rootRef)
         subtree.rootRef->page += static_cast<std::uint32_t>(nodeBase);
-    subtree.triangles = {};
-    subtree.nodePages = {};
+    // Free the memory, not just the elements: `= {}` picks operator=(initializer_list), which
+    // keeps the capacity, and every committed chunk would stay resident until the build ends.
+    subtree.triangles = std::vector<storage::PackedTriangle>();
+    subtree.nodePages = std::vector<std::vector<EncodedSubtree::Slot>>();
     return root;
 }
 

@@ -9,6 +9,7 @@
 #include <nlohmann/json.hpp>
 
 #include <cstdio>
+#include <filesystem>
 #include <fstream>
 #include <memory>
 #include <string>
@@ -69,6 +70,15 @@ int runBuild(const BuildArgs& args) {
     if (!args.quiet)
         options.progress = [&progress](const builder::BuildProgress& p) { progress.update(p.phase, p.done, p.total); };
 
+    // A mistyped -o must not create directories (the builder makes its spill folder beside the
+    // output, creating parents): the output's directory has to exist already.
+    const std::filesystem::path outputDirectory = std::filesystem::path(args.output).parent_path();
+    std::error_code directoryError;
+    if (!outputDirectory.empty() && !std::filesystem::is_directory(outputDirectory, directoryError))
+        return reportError(
+                "build",
+                Status(ErrorCode::NotFound,
+                       "output directory " + outputDirectory.string() + " does not exist"));
     auto sceneBuilder = builder::SceneBuilder::create(args.output, options);
     if (!sceneBuilder)
         return reportError("build", sceneBuilder.status());

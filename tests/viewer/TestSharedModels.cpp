@@ -1,0 +1,187 @@
+// Every valid model of ../shared/data through the real CLI: `farfield build`, then
+// `farfield render` with ε = 0 and with --method full, which must agree pixel for pixel.
+
+#include "FarfieldProcess.h"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cctype>
+#include <filesystem>
+#include <string>
+#include <vector>
+
+namespace ff::viewer::test {
+namespace {
+
+namespace fs = std::filesystem;
+using json = nlohmann::json;
+
+const fs::path kData = FF_SHARED_DATA_DIR;
+
+/** The valid models, listed so that none is skipped silently (ListMatchesTheDataFolder). */
+const std::vector<std::string> kModels = {
+        "animated/AnimatedMorphCube/glTF-Binary/AnimatedMorphCube.glb",
+        "animated/AnimatedMorphSphere/glTF-Binary/AnimatedMorphSphere.glb",
+        "animated/BoxAnimated/glTF-Binary/BoxAnimated.glb",
+        "animated/CesiumMan/glTF/CesiumMan.gltf",
+        "animated/Fox/glTF-Binary/Fox.glb",
+        "animated/MorphPrimitivesTest/glTF-Binary/MorphPrimitivesTest.glb",
+        "animated/RiggedSimple/glTF-Binary/RiggedSimple.glb",
+        "draco/Box/glTF-Draco/Box.gltf",
+        "draco/CesiumMan/glTF-Draco/CesiumMan.gltf",
+        "draco/CesiumMilkTruck/glTF-Draco/CesiumMilkTruck.gltf",
+        "draco/MorphPrimitivesTest/glTF-Draco/MorphPrimitivesTest.gltf",
+        "draco/RiggedSimple/glTF-Draco/RiggedSimple.gltf",
+        "draco/WaterBottle/glTF-Draco/WaterBottle.gltf",
+        "edgecases/MeshPrimitiveModes/glTF/MeshPrimitiveModes.gltf",
+        "edgecases/SimpleInstancing/glTF-Binary/SimpleInstancing.glb",
+        "edgecases/SimpleSparseAccessor/glTF/SimpleSparseAccessor.gltf",
+        "edgecases/TriangleWithoutIndices/glTF/TriangleWithoutIndices.gltf",
+        "scanned/demosthenes/demosthenes-low-res.glb",
+        "scanned/skull/skull.glb",
+        "static/Avocado/glTF/Avocado.gltf",
+        "static/Box/glTF-Embedded/Box.gltf",
+        "static/Box/glTF/Box.gltf",
+        "static/CesiumMilkTruck/glTF-Binary/CesiumMilkTruck.glb",
+        "static/MetalRoughSpheresNoTextures/glTF-Binary/MetalRoughSpheresNoTextures.glb",
+        "static/NegativeScaleTest/glTF-Binary/NegativeScaleTest.glb",
+};
+
+std::string testName(const std::string& path) {
+    std::string name = path;
+    for (char& c : name) {
+        if (!std::isalnum(static_cast<unsigned char>(c)))
+            c = '_';
+    }
+    return name;
+}
+
+/** Builds `model` into dir/scene.ffs with a report; fails the test if the build fails. */
+json buildModel(const std::string& model, const fs::path& dir) {
+    const ProcessResult built = runFarfield(
+            {"build",
+             "-q",
+             (kData / model).string(),
+             "-o",
+             (dir / "scene.ffs").string(),
+             "--report",
+             (dir / "report.json").string()},
+            dir);
+    EXPECT_TRUE(built.exited && built.exitCode == 0) << built.describe();
+    EXPECT_TRUE(built.err.empty()) << "a quiet build printed: " << built.err;
+    return readJsonFile(dir / "report.json");
+}
+
+TEST(SharedModelListTest, ListMatchesTheDataFolder) {
+    std::vector<std::string> found;
+    for (const char* folder : {"static", "draco", "animated", "edgecases", "scanned"}) {
+        for (const auto& entry : fs::recursive_directory_iterator(kData / folder)) {
+            const std::string ext = entry.path().extension().string();
+            if (entry.is_regular_file() && (ext == ".gltf" || ext == ".glb"))
+                found.push_back(fs::relative(entry.path(), kData).string());
+        }
+    }
+    std::sort(found.begin(), found.end());
+    EXPECT_EQ(found, kModels);
+    EXPECT_EQ(kModels.size(), 25u);
+}
+
+class SharedModelTest : public ::testing::TestWithParam<std::string> {};
+
+// The importer counts `declared_triangles` per instance before anything is dropped; the builder
+// drops non-finite and zero-area triangles once per prototype (`dropped_*`), and every instance
+// then draws the prototype without them. So instanced = declared - sum over prototypes of
+// (dropped in it x its instances). Only two models drop anything:
+//  - WaterBottle: 2 zero-area triangles in its single mesh, drawn once: 4510 - 2.
+//  - MetalRoughSpheresNoTextures: its 98 spheres share two prototypes (the importer merges meshes
+//    with equal geometry and base colour: 49 silver, 49 gold spheres), each sphere has 2
+//    zero-area triangles (degenerate pole fans), so 4 are dropped in the file but
+//    2 x 98 = 196 fewer are drawn.
+TEST_P(SharedModelTest, BuildReportAccountsForEveryDeclaredTriangle) {
+    const fs::path dir = freshTestDir();
+    const json report = buildModel(GetParam(), dir);
+    ASSERT_TRUE(report.is_object()) << "no build report";
+
+    const auto declared = report.at("declared_triangles").get<std::uint64_t>();
+    const auto input = report.at("input_triangles").get<std::uint64_t>();
+    const auto nonFinite = report.at("dropped_non_finite_triangles").get<std::uint64_t>();
+    const auto degenerate = report.at("dropped_degenerate_triangles").get<std::uint64_t>();
+    const auto stored = report.at("stored_triangles").get<std::uint64_t>();
+    const auto instanced = report.at("instanced_triangles").get<std::uint64_t>();
+    EXPECT_GT(declared, 0u);
+    EXPECT_EQ(stored, input - nonFinite - degenerate);
+    EXPECT_EQ(report.at("empty_prototypes").get<std::uint64_t>(), 0u);
+
+    std::uint64_t droppedPerInstance = 0;
+    if (GetParam().find("WaterBottle") != std::string::npos) {
+        EXPECT_EQ(nonFinite, 0u);
+        EXPECT_EQ(degenerate, 2u);
+        droppedPerInstance = 2;
+    } else if (GetParam().find("MetalRoughSpheresNoTextures") != std::string::npos) {
+        EXPECT_EQ(nonFinite, 0u);
+        EXPECT_EQ(degenerate, 4u);
+        EXPECT_EQ(report.at("instances").get<std::uint64_t>(), 98u + 4u); // spheres + 4 labels
+        droppedPerInstance = 2 * 98;
+    } else {
+        EXPECT_EQ(nonFinite + degenerate, 0u) << "a new model drops triangles: explain it here";
+    }
+    EXPECT_EQ(instanced, declared - droppedPerInstance);
+}
+
+// ε = 0 draws every triangle through the hierarchy, in the order --method full submits them
+// (Selection::mergeGeometryDraws), so the two images must be identical at any view.
+TEST_P(SharedModelTest, EpsilonZeroRendersExactlyLikeFull) {
+    const fs::path dir = freshTestDir();
+    const json report = buildModel(GetParam(), dir);
+    ASSERT_TRUE(report.is_object()) << "no build report";
+
+    struct View {
+        const char* name;
+        std::vector<std::string> flags;
+    };
+    const std::vector<View> views = {
+            {"default", {}},
+            {"side", {"--azimuth", "130", "--elevation", "-25", "--distance", "1.6"}},
+    };
+    for (const View& view : views) {
+        runtime::Image images[2];
+        const char* methods[2][2] = {{"--epsilon", "0"}, {"--method", "full"}};
+        for (int m = 0; m < 2; ++m) {
+            const fs::path png = dir / (std::string(view.name) + std::to_string(m) + ".png");
+            std::vector<std::string> args = {
+                    "render",
+                    (dir / "scene.ffs").string(),
+                    "-o",
+                    png.string(),
+                    "--size",
+                    "160x120",
+                    "--coverage-alpha",
+                    methods[m][0],
+                    methods[m][1]};
+            args.insert(args.end(), view.flags.begin(), view.flags.end());
+            const ProcessResult rendered = runFarfield(args, dir);
+            ASSERT_TRUE(rendered.exited && rendered.exitCode == 0) << rendered.describe();
+            images[m] = decodeImage(png);
+            ASSERT_EQ(images[m].width, 160);
+            ASSERT_EQ(images[m].height, 120);
+        }
+        // Opaque triangles only: coverage is all or nothing. That also makes the PNG round trip
+        // (OIIO un-premultiplies on write, premultiplies on read) exact for this comparison.
+        for (std::size_t i = 3; i < images[0].rgba.size(); i += 4)
+            ASSERT_TRUE(images[0].rgba[i] == 0 || images[0].rgba[i] == 255)
+                    << "partial coverage at " << i / 4;
+        EXPECT_GT(coveredPixels(images[0]), 0u) << view.name << " view shows only background";
+        EXPECT_EQ(differingPixels(images[0], images[1]), 0u)
+                << view.name << " view: ε = 0 and full differ";
+    }
+}
+
+INSTANTIATE_TEST_SUITE_P(
+        SharedData,
+        SharedModelTest,
+        ::testing::ValuesIn(kModels),
+        [](const ::testing::TestParamInfo<std::string>& p) { return testName(p.param); });
+
+} // namespace
+} // namespace ff::viewer::test
