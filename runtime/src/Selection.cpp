@@ -119,6 +119,8 @@ Status Selection::select(const Camera& camera, const SelectionOptions& options, 
             return mNewFailures.front().withContext("the root node is unreadable");
     }
     mergeGeometryDraws();
+    out.cubesAsPoints = options.cubeStyle == CubeStyle::Points ||
+                        (options.cubeStyle == CubeStyle::Auto && options.epsilonPixels <= 2.0f);
     return Status::ok();
 }
 

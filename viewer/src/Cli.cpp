@@ -20,6 +20,7 @@ int runCli(int argc, char** argv) {
             {"render", addRenderCommand(app)},
             {"check", addCheckCommand(app)},
             {"bench", addBenchCommand(app)},
+            {"replay", addReplayCommand(app)},
             {"path", addPathCommand(app)},
     };
     try {

@@ -25,6 +25,7 @@ struct RenderArgs {
     std::string size = "640x480";
     float epsilon = 1.0f;
     std::string method = "hierarchical";
+    std::string cubeDraw = "auto";
     int supersample = 1;
     int frames = 1;
     std::string stats;
@@ -70,6 +71,9 @@ int runRender(const RenderArgs& args) {
     runtime::SelectionOptions selection;
     selection.method = args.method == "full" ? runtime::Method::Full : runtime::Method::Hierarchical;
     selection.epsilonPixels = args.epsilon;
+    selection.cubeStyle = args.cubeDraw == "faces" ? runtime::CubeStyle::Faces
+                         : args.cubeDraw == "points" ? runtime::CubeStyle::Points
+                                                     : runtime::CubeStyle::Auto;
     nlohmann::json frames = nlohmann::json::array();
     Result<runtime::Frame> frame = Status(ErrorCode::Internal, "no frame rendered");
     std::vector<Status> failures;
@@ -118,6 +122,9 @@ CommandRunner addRenderCommand(CLI::App& app) {
     cmd->add_option("--size", args->size, "Image size WIDTHxHEIGHT")->capture_default_str();
     cmd->add_option("--epsilon", args->epsilon, "Cells smaller than this many pixels are drawn as color cubes (0: all geometry)")->capture_default_str();
     cmd->add_option("--method", args->method, "hierarchical or full (every triangle, no hierarchy)")->capture_default_str();
+    cmd->add_option("--cube-draw", args->cubeDraw, "Color cubes as faces, points (sub-pixel splats) or auto (points when epsilon <= 2)")
+            ->capture_default_str()
+            ->check(CLI::IsMember({"auto", "faces", "points"}));
     cmd->add_option("--supersample", args->supersample, "Render NxN samples per pixel (a reference)")->capture_default_str();
     cmd->add_option("--frames", args->frames, "Render the view this many times (timing; first frame uploads)")->capture_default_str();
     cmd->add_option("--stats", args->stats, "Write the per-frame statistics as JSON here (also printed on stdout)");

@@ -92,6 +92,7 @@ struct Renderer::Impl {
     RendererOptions options;
     GLuint geometryProgram = 0;
     GLuint cubeProgram = 0;
+    GLuint cubePointProgram = 0;
     GLuint geometryVao = 0;
     GLuint cubeVao = 0;
     // The page arena: one slot per resident geometry page.
@@ -121,7 +122,7 @@ struct Renderer::Impl {
     Result<std::uint32_t> residentSlot(std::uint64_t page, FrameStats& stats);
     void drawBatch(const glm::mat4& viewProjection);
     Status drawGeometry(const DrawList& list, const glm::mat4& viewProjection, FrameStats& stats);
-    void drawCubes(const DrawList& list, const glm::mat4& viewProjection);
+    void drawCubes(const DrawList& list, const glm::mat4& viewProjection, float pixelScale);
 };
 
 Renderer::Impl::~Impl() {
@@ -131,6 +132,7 @@ Renderer::Impl::~Impl() {
     glDeleteVertexArrays(2, vaos);
     glDeleteProgram(geometryProgram);
     glDeleteProgram(cubeProgram);
+    glDeleteProgram(cubePointProgram);
     glDeleteFramebuffers(1, &framebuffer);
     glDeleteTextures(1, &colorTexture);
     glDeleteRenderbuffers(1, &depthBuffer);
@@ -138,6 +140,10 @@ Renderer::Impl::~Impl() {
 
 Renderer::Renderer(std::unique_ptr<Impl> impl) : mImpl(std::move(impl)) {}
 Renderer::~Renderer() = default;
+
+std::uint64_t Renderer::residentGeometryBytes() const noexcept {
+    return static_cast<std::uint64_t>(mImpl->slotOfPage.size()) * static_cast<std::uint64_t>(mImpl->slotBytes);
+}
 
 Result<std::unique_ptr<Renderer>> Renderer::create(
         const storage::SceneFile& scene, IPageAccess& pages, const RendererOptions& options) {
@@ -147,6 +153,7 @@ Result<std::unique_ptr<Renderer>> Renderer::create(
     impl->options = options;
     FF_ASSIGN_OR_RETURN(impl->geometryProgram, linkProgram(gl::kGeometryVertexShader, gl::kGeometryFragmentShader));
     FF_ASSIGN_OR_RETURN(impl->cubeProgram, linkProgram(gl::kCubeVertexShader, gl::kCubeFragmentShader));
+    FF_ASSIGN_OR_RETURN(impl->cubePointProgram, linkProgram(gl::kCubePointVertexShader, gl::kCubeFragmentShader));
 
     // Slots hold a page's triangles without its trailer, so vertex offsets stay whole vertices.
     const std::uint32_t trianglesPerPage = storage::trianglesPerPage(scene.pageSize());
@@ -301,19 +308,27 @@ Status Renderer::Impl::drawGeometry(const DrawList& list, const glm::mat4& viewP
     return Status::ok();
 }
 
-void Renderer::Impl::drawCubes(const DrawList& list, const glm::mat4& viewProjection) {
+void Renderer::Impl::drawCubes(const DrawList& list, const glm::mat4& viewProjection, float pixelScale) {
     if (list.cubes.empty())
         return;
     const auto bytes = static_cast<GLsizeiptr>(list.cubes.size() * sizeof(CubeDraw));
     ensureCapacity(cubes, cubesCap, bytes);
     bufferSubData(cubes, 0, bytes, list.cubes.data());
-    glUseProgram(cubeProgram);
-    glUniformMatrix4fv(glGetUniformLocation(cubeProgram, "uViewProjection"), 1, GL_FALSE, glm::value_ptr(viewProjection));
+    const GLuint program = list.cubesAsPoints ? cubePointProgram : cubeProgram;
+    glUseProgram(program);
+    glUniformMatrix4fv(glGetUniformLocation(program, "uViewProjection"), 1, GL_FALSE, glm::value_ptr(viewProjection));
     glBindVertexArray(cubeVao);
     glEnable(GL_BLEND);
     glBlendFunc(GL_ONE, GL_ONE_MINUS_SRC_ALPHA); // premultiplied "over", back to front
     glDepthMask(GL_FALSE);
-    glDrawArraysInstanced(GL_TRIANGLES, 0, 18, static_cast<GLsizei>(list.cubes.size()));
+    if (list.cubesAsPoints) {
+        glUniform1f(glGetUniformLocation(program, "uPixelScale"), pixelScale);
+        glEnable(GL_PROGRAM_POINT_SIZE);
+        glDrawArraysInstanced(GL_POINTS, 0, 1, static_cast<GLsizei>(list.cubes.size()));
+        glDisable(GL_PROGRAM_POINT_SIZE);
+    } else {
+        glDrawArraysInstanced(GL_TRIANGLES, 0, 18, static_cast<GLsizei>(list.cubes.size()));
+    }
     glDepthMask(GL_TRUE);
     glDisable(GL_BLEND);
 }
@@ -371,7 +386,7 @@ Result<Image> Renderer::render(
     const glm::mat4 viewProjection =
             camera.projection(static_cast<float>(width) / static_cast<float>(height)) * camera.view();
     FF_RETURN_IF_ERROR(s.drawGeometry(list, viewProjection, stats));
-    s.drawCubes(list, viewProjection);
+    s.drawCubes(list, viewProjection, camera.pixelScale(static_cast<float>(targetHeight)));
     glFinish(); // the frame time is the time until the GPU is done, not until submission
     stats.drawMs += std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
 

@@ -78,6 +78,41 @@ void main() {
 }
 )";
 
+const char* const kCubePointVertexShader = R"(#version 450 core
+layout(location = 0) in vec3 aBoxMin;
+layout(location = 1) in vec3 aBoxMax;
+layout(location = 2) in uint aTransform;
+layout(location = 3) in vec4 aFaces[6];    // premultiplied linear RGBA8, -X +X -Y +Y -Z +Z
+layout(std430, binding = 0) readonly buffer Transforms { mat4 transforms[]; };
+layout(std430, binding = 2) readonly buffer LocalEyes { vec4 localEyes[]; };
+uniform mat4 uViewProjection;
+uniform float uPixelScale; // pixels per world unit at view depth 1 (orthographic: per unit)
+out vec4 vColor;
+
+// A cube smaller than a pixel or two, drawn as one point: the faces the viewer sees, weighted by
+// their projected areas (a box face's area times |cos| to the view direction), with alpha scaled
+// by how much of the point the box really covers, so coverage stays right on average instead of
+// depending on which pixel centres a tiny quad happens to hit.
+void main() {
+    vec3 center = 0.5 * (aBoxMin + aBoxMax);
+    vec3 extent = aBoxMax - aBoxMin;
+    vec3 toEye = localEyes[aTransform].xyz - center;
+    vec3 direction = toEye / max(length(toEye), 1e-30);
+    vec3 weight = vec3(extent.y * extent.z, extent.z * extent.x, extent.x * extent.y) * abs(direction);
+    float area = weight.x + weight.y + weight.z; // the box's projected area, local units
+    vec4 color = weight.x * aFaces[direction.x > 0.0 ? 1 : 0] + weight.y * aFaces[direction.y > 0.0 ? 3 : 2] +
+                 weight.z * aFaces[direction.z > 0.0 ? 5 : 4];
+    color /= max(area, 1e-30);
+    mat4 model = transforms[aTransform];
+    gl_Position = uViewProjection * (model * vec4(center, 1.0));
+    float scale = length(model[0].xyz) * uPixelScale / max(gl_Position.w, 1e-30);
+    float pixels = area * scale * scale;
+    float size = max(1.0, ceil(sqrt(pixels)));
+    gl_PointSize = size;
+    vColor = color * min(1.0, pixels / (size * size));
+}
+)";
+
 const char* const kCubeFragmentShader = R"(#version 450 core
 in vec4 vColor;
 layout(location = 0) out vec4 fragColor;

@@ -34,6 +34,8 @@ struct DrawList {
     std::vector<glm::vec3> localEyes;
     std::vector<GeometryDraw> geometry;
     std::vector<CubeDraw> cubes;
+    /** Draw the cubes as area-weighted points (all sub-pixel) rather than as faces. */
+    bool cubesAsPoints = false;
 
     void clear() {
         transforms.clear();

@@ -36,6 +36,7 @@ public:
             const Camera& camera, SelectionOptions selection, int width, int height, int supersample = 1);
 
     const DrawList& lastDrawList() const noexcept { return mDrawList; }
+    std::uint64_t residentGeometryBytes() const noexcept { return mRenderer->residentGeometryBytes(); }
     /** Page failures first met by the last frame (each reported once). */
     const std::vector<Status>& newFailures() const noexcept { return mSelection.newFailures(); }
 

@@ -47,6 +47,9 @@ public:
     [[nodiscard]] Result<Image> render(
             const DrawList& list, const Camera& camera, int width, int height, int supersample, FrameStats& stats);
 
+    /** Bytes of geometry pages resident in the GPU page arena. */
+    std::uint64_t residentGeometryBytes() const noexcept;
+
 private:
     struct Impl;
     explicit Renderer(std::unique_ptr<Impl> impl);

@@ -20,11 +20,19 @@ enum class Method {
     Full,         ///< every triangle of every instance, no hierarchy (the brute-force baseline)
 };
 
+/** How color cubes reach the screen. */
+enum class CubeStyle {
+    Faces,  ///< the visible faces as quads (Chamberlain et al.)
+    Points, ///< one point per cube: visible faces blended by projected area, alpha by coverage
+    Auto,   ///< points when ε <= 2 pixels (every drawn cube is then sub-pixel), else faces
+};
+
 struct SelectionOptions {
     Method method = Method::Hierarchical;
     /** A cell whose projected size is below this many pixels is drawn as its color cube;
      *  0 draws geometry everywhere. */
     float epsilonPixels = 1.0f;
+    CubeStyle cubeStyle = CubeStyle::Auto;
     float viewportWidth = 640.0f;
     float viewportHeight = 480.0f;
 };

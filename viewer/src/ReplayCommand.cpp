@@ -1,0 +1,357 @@
+// `farfield replay`: the paging-behaviour test. Replays a camera path through the streaming
+// page cache under a fixed budget and reports, per frame and in summary, what the cache did
+// and what the viewer saw (frame time, debt, image error against everything resident).
+
+#include "CameraOptions.h"
+#include "Commands.h"
+#include "ImageOutput.h"
+#include "Units.h"
+
+#include <ff/cache/PageCache.h>
+#include <ff/cache/ScenePageSource.h>
+#include <ff/runtime/CachedPageAccess.h>
+#include <ff/runtime/CameraPath.h>
+#include <ff/runtime/FrameRenderer.h>
+#include <ff/runtime/ImageMetrics.h>
+#include <ff/runtime/OffscreenContext.h>
+
+#include <nlohmann/json.hpp>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <memory>
+#include <mutex>
+#include <sstream>
+#include <string>
+#include <unordered_set>
+#include <vector>
+
+namespace ff::viewer {
+
+namespace {
+
+struct ReplayArgs {
+    std::string scene;
+    std::string path;
+    std::uint64_t cacheMb = 512;
+    std::string gpuBudget = "512MiB";
+    bool sync = false;
+    std::string size = "640x480";
+    float epsilon = 1.0f;
+    unsigned ioThreads = 2;
+    std::size_t uploadsPerFrame = 64;
+    std::string csv;
+    std::string json;
+    std::string summary;
+    std::string framesDir;
+    bool error = false;
+};
+
+struct ProcessMemory {
+    std::uint64_t anonBytes = 0;
+    std::uint64_t fileBytes = 0;
+};
+
+// Resident memory split as the kernel counts it: heap and stacks apart from mapped files.
+ProcessMemory processMemory() {
+    ProcessMemory m;
+    std::ifstream status("/proc/self/status");
+    std::string line;
+    while (std::getline(status, line)) {
+        if (line.rfind("RssAnon:", 0) == 0)
+            m.anonBytes = std::stoull(line.substr(8)) * 1024;
+        else if (line.rfind("RssFile:", 0) == 0)
+            m.fileBytes = std::stoull(line.substr(8)) * 1024;
+    }
+    return m;
+}
+
+double percentile(std::vector<double> values, double p) {
+    if (values.empty())
+        return 0.0;
+    std::sort(values.begin(), values.end());
+    const auto index = static_cast<std::size_t>(std::ceil(p * static_cast<double>(values.size()))) - 1;
+    return values[std::min(index, values.size() - 1)];
+}
+
+/** Counts pages read, through the source, so the replay knows the unique bytes the path needed. */
+class CountingSource final : public cache::IPageSource {
+public:
+    explicit CountingSource(std::shared_ptr<cache::IPageSource> inner) : mInner(std::move(inner)) {}
+    std::uint32_t pageSize() const override { return mInner->pageSize(); }
+    std::uint64_t pageCount() const override { return mInner->pageCount(); }
+    Status readPage(std::uint64_t index, std::span<std::byte> out) override {
+        {
+            std::lock_guard<std::mutex> lock(mMutex); // I/O threads read concurrently
+            mPages.insert(index);
+        }
+        return mInner->readPage(index, out);
+    }
+    std::uint64_t uniquePages() const {
+        std::lock_guard<std::mutex> lock(mMutex);
+        return mPages.size();
+    }
+
+private:
+    std::shared_ptr<cache::IPageSource> mInner;
+    mutable std::mutex mMutex;
+    std::unordered_set<std::uint64_t> mPages;
+};
+
+int runReplay(const ReplayArgs& args) {
+    auto size = parseImageSize(args.size);
+    if (!size)
+        return reportError("replay", size.status().withContext("--size"));
+    auto gpuBudget = parseByteSize(args.gpuBudget);
+    if (!gpuBudget)
+        return reportError("replay", gpuBudget.status().withContext("--gpu-budget"));
+    if (args.cacheMb == 0 || args.uploadsPerFrame == 0 || args.ioThreads == 0)
+        return reportError("replay", Status(ErrorCode::InvalidArgument, "--cache-mb, --uploads-per-frame and --io-threads must be positive"));
+
+    std::ifstream pathFile(args.path);
+    if (!pathFile)
+        return reportError("replay", Status(ErrorCode::NotFound, "cannot read camera path " + args.path));
+    std::stringstream pathText;
+    pathText << pathFile.rdbuf();
+    auto path = runtime::CameraPath::fromJson(pathText.str());
+    if (!path)
+        return reportError("replay", path.status().withContext(args.path));
+
+    auto scene = storage::SceneFile::open(args.scene);
+    if (!scene)
+        return reportError("replay", scene.status().withContext(args.scene));
+    auto source = cache::ScenePageSource::open(args.scene);
+    if (!source)
+        return reportError("replay", source.status().withContext(args.scene));
+    auto counting = std::make_shared<CountingSource>(std::move(*source));
+    cache::PageCacheOptions cacheOptions;
+    cacheOptions.budgetBytes = args.cacheMb << 20;
+    cacheOptions.ioThreads = args.ioThreads;
+    auto pageCache = cache::PageCache::create(counting, cacheOptions);
+    if (!pageCache)
+        return reportError("replay", pageCache.status());
+    runtime::CachedPageAccess access(**pageCache, (*scene)->pageSize());
+
+    // The minimum working set: the root's page must fit and be resident before the first frame.
+    const std::uint64_t rootPage = (*scene)->header().root.page;
+    (*pageCache)->request(rootPage, 1e30f);
+    (*pageCache)->drain();
+    if ((*pageCache)->state(rootPage) != cache::PageState::Resident)
+        return reportError("replay", Status(ErrorCode::OutOfBudget, "--cache-mb " + std::to_string(args.cacheMb) +
+                                                                           " cannot hold the scene's root page"));
+
+    auto context = runtime::OffscreenContext::create();
+    if (!context)
+        return reportError("replay", context.status());
+    runtime::RendererOptions rendererOptions;
+    rendererOptions.gpuBudgetBytes = *gpuBudget;
+    auto streaming = runtime::FrameRenderer::create(**scene, access, rendererOptions);
+    if (!streaming)
+        return reportError("replay", streaming.status());
+    std::unique_ptr<runtime::FrameRenderer> complete; // everything resident: the error reference
+    if (args.error) {
+        auto reference = runtime::FrameRenderer::create(**scene, rendererOptions);
+        if (!reference)
+            return reportError("replay", reference.status());
+        complete = std::move(*reference);
+    }
+    if (!args.framesDir.empty())
+        std::filesystem::create_directories(args.framesDir);
+
+    runtime::SelectionOptions selection;
+    selection.epsilonPixels = args.epsilon;
+    const runtime::Bounds bounds = sceneBounds(**scene);
+    const std::int64_t frames = path->frameCount();
+    nlohmann::json perFrame = nlohmann::json::array();
+    std::ofstream csv;
+    if (!args.csv.empty()) {
+        csv.open(args.csv);
+        csv << "frame,time_s,frame_ms,select_ms,draw_ms,requests,hits,misses,bytes_read,resident_bytes,"
+               "gpu_resident_bytes,in_flight,evicted,dropped,nodes_deferred,triangles,cubes,stalled,psnr_db,holes\n";
+    }
+    std::vector<double> frameMs;
+    std::uint64_t debtFrames = 0;
+    std::uint64_t stalledFrames = 0;
+    std::uint64_t peakResident = 0;
+    ProcessMemory peakMemory;
+    std::vector<Status> failures;
+    // Frames to full quality: counted from the first frame after a jump in the camera (a
+    // teleport, or the cold start) to the first frame without debt.
+    std::int64_t sinceJump = 0;
+    std::int64_t maxFramesToFullQuality = 0;
+    bool converged = false;
+    glm::vec3 lastEye(NAN);
+    const float jump = 0.1f * bounds.radius();
+    cache::PageCacheStats previous = (*pageCache)->stats();
+
+    for (std::int64_t f = 0; f < frames; ++f) {
+        runtime::Camera camera = path->sample(path->frameTime(f));
+        camera.fitClipPlanes(bounds);
+        if (!(glm::length(camera.eye - lastEye) <= jump)) { // NaN on the first frame: a jump
+            if (!converged && f > 0)
+                maxFramesToFullQuality = std::max(maxFramesToFullQuality, sinceJump);
+            sinceJump = 0;
+            converged = false;
+        }
+        lastEye = camera.eye;
+
+        const auto start = std::chrono::steady_clock::now();
+        (*pageCache)->pump(args.uploadsPerFrame);
+        Result<runtime::Frame> frame = (*streaming)->render(camera, selection, size->x, size->y);
+        bool stalled = false;
+        // --sync: the frame waits for what it lacks (a reference mode; every wait is a stall).
+        while (args.sync && frame && frame->stats.nodesDeferred > 0) {
+            const std::uint64_t before = (*pageCache)->stats().completed;
+            (*pageCache)->drain();
+            stalled = true;
+            frame = (*streaming)->render(camera, selection, size->x, size->y);
+            if ((*pageCache)->stats().completed == before)
+                break; // nothing more fits the budget: this frame is as good as it gets
+        }
+        if (!frame)
+            return reportError("replay", frame.status());
+        const double ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+        const auto& fresh = (*streaming)->newFailures();
+        failures.insert(failures.end(), fresh.begin(), fresh.end());
+
+        const cache::PageCacheStats& now = (*pageCache)->stats();
+        peakResident = std::max(peakResident, now.residentBytes);
+        const ProcessMemory memory = processMemory();
+        peakMemory.anonBytes = std::max(peakMemory.anonBytes, memory.anonBytes);
+        peakMemory.fileBytes = std::max(peakMemory.fileBytes, memory.fileBytes);
+        frameMs.push_back(ms);
+        const bool debt = frame->stats.nodesDeferred > 0;
+        debtFrames += debt ? 1 : 0;
+        stalledFrames += stalled ? 1 : 0;
+        if (!converged) {
+            ++sinceJump;
+            if (!debt) {
+                converged = true;
+                maxFramesToFullQuality = std::max(maxFramesToFullQuality, sinceJump);
+            }
+        }
+
+        double psnr = NAN;
+        std::uint64_t holes = 0;
+        if (complete) {
+            Result<runtime::Frame> reference = complete->render(camera, selection, size->x, size->y);
+            if (!reference)
+                return reportError("replay", reference.status());
+            if (auto e = runtime::colorError(frame->image, reference->image))
+                psnr = e->psnrSrgb;
+            if (auto c = runtime::coverageError(frame->image, reference->image))
+                holes = c->holes;
+        }
+        if (!args.framesDir.empty()) {
+            char name[32];
+            std::snprintf(name, sizeof(name), "frame-%05lld.png", static_cast<long long>(f));
+            if (Status written = writeImage(std::filesystem::path(args.framesDir) / name, frame->image); !written)
+                return reportError("replay", written);
+        }
+
+        const nlohmann::json row = {
+                {"frame", f},
+                {"time_s", path->frameTime(f)},
+                {"frame_ms", ms},
+                {"select_ms", frame->stats.selectMs},
+                {"draw_ms", frame->stats.drawMs},
+                {"requests", now.requests - previous.requests},
+                {"hits", now.hits - previous.hits},
+                {"misses", now.misses - previous.misses},
+                {"bytes_read", now.bytesRead - previous.bytesRead},
+                {"resident_bytes", now.residentBytes},
+                {"gpu_resident_bytes", (*streaming)->residentGeometryBytes()},
+                {"in_flight", now.inFlight},
+                {"evicted", now.evicted - previous.evicted},
+                {"dropped", now.dropped - previous.dropped},
+                {"nodes_deferred", frame->stats.nodesDeferred},
+                {"triangles", frame->stats.trianglesDrawn},
+                {"cubes", frame->stats.cubesDrawn},
+                {"stalled", stalled},
+                {"psnr_db", std::isfinite(psnr) ? nlohmann::json(psnr) : nlohmann::json(nullptr)},
+                {"holes", holes},
+        };
+        if (csv.is_open()) {
+            csv << f << ',' << row["time_s"] << ',' << ms << ',' << frame->stats.selectMs << ',' << frame->stats.drawMs
+                << ',' << row["requests"] << ',' << row["hits"] << ',' << row["misses"] << ',' << row["bytes_read"] << ','
+                << now.residentBytes << ',' << row["gpu_resident_bytes"] << ',' << now.inFlight << ','
+                << row["evicted"] << ',' << row["dropped"] << ',' << frame->stats.nodesDeferred << ','
+                << frame->stats.trianglesDrawn << ',' << frame->stats.cubesDrawn << ',' << (stalled ? 1 : 0) << ','
+                << (std::isfinite(psnr) ? std::to_string(psnr) : std::string()) << ',' << holes << '\n';
+        }
+        perFrame.push_back(row);
+        previous = now;
+    }
+    if (!converged)
+        maxFramesToFullQuality = std::max(maxFramesToFullQuality, sinceJump);
+
+    const cache::PageCacheStats& total = (*pageCache)->stats();
+    const std::uint64_t uniqueBytes = counting->uniquePages() * (*scene)->pageSize();
+    const nlohmann::json summary = {
+            {"scene", args.scene},
+            {"path", args.path},
+            {"mode", args.sync ? "sync" : "async"},
+            {"frames", frames},
+            {"p50_ms", percentile(frameMs, 0.50)},
+            {"p95_ms", percentile(frameMs, 0.95)},
+            {"p99_ms", percentile(frameMs, 0.99)},
+            {"bytes_read", total.bytesRead},
+            {"unique_bytes", uniqueBytes},
+            {"over_fetch", uniqueBytes ? static_cast<double>(total.bytesRead) / static_cast<double>(uniqueBytes) : 0.0},
+            {"peak_resident_bytes", peakResident},
+            {"budget_bytes", (*pageCache)->budgetBytes()},
+            {"debt_frames", debtFrames},
+            {"stalled_frames", stalledFrames},
+            {"max_frames_to_full_quality", maxFramesToFullQuality},
+            {"requests", total.requests},
+            {"cancelled", total.cancelled},
+            {"evicted", total.evicted},
+            {"dropped", total.dropped},
+            {"failed_pages", failures.size()},
+            {"peak_rss_anon_bytes", peakMemory.anonBytes},
+            {"peak_rss_file_bytes", peakMemory.fileBytes},
+    };
+    if (!args.json.empty()) {
+        std::ofstream out(args.json);
+        out << perFrame.dump(1) << "\n";
+    }
+    if (!args.summary.empty()) {
+        std::ofstream out(args.summary);
+        out << summary.dump(2) << "\n";
+        if (!out)
+            return reportError("replay", Status(ErrorCode::IoError, "cannot write " + args.summary));
+    }
+    std::printf("%s\n", summary.dump().c_str());
+    for (const Status& failure : failures)
+        reportError("replay", failure.withContext(args.scene));
+    return failures.empty() ? 0 : 1;
+}
+
+} // namespace
+
+CommandRunner addReplayCommand(CLI::App& app) {
+    auto args = std::make_shared<ReplayArgs>();
+    CLI::App* cmd = app.add_subcommand(
+            "replay", "Replay a camera path through the streaming cache under a budget; per-frame paging telemetry");
+    cmd->add_option("scene", args->scene, "Scene file (.ffs)")->required();
+    cmd->add_option("path", args->path, "Camera path (.json, see `farfield path`)")->required();
+    cmd->add_option("--cache-mb", args->cacheMb, "Hard budget for resident pages, MiB")->capture_default_str();
+    cmd->add_option("--gpu-budget", args->gpuBudget, "GPU memory for geometry pages")->capture_default_str();
+    cmd->add_flag("--sync", args->sync, "Wait for every page a frame wants (deterministic reference; counts stalls)");
+    cmd->add_option("--size", args->size, "Image size WIDTHxHEIGHT")->capture_default_str();
+    cmd->add_option("--epsilon", args->epsilon, "Color-cube threshold in pixels")->capture_default_str();
+    cmd->add_option("--io-threads", args->ioThreads, "Background read threads")->capture_default_str();
+    cmd->add_option("--uploads-per-frame", args->uploadsPerFrame, "Finished reads installed per frame at most")
+            ->capture_default_str();
+    cmd->add_option("--csv", args->csv, "Per-frame telemetry as CSV");
+    cmd->add_option("--json", args->json, "Per-frame telemetry as JSON");
+    cmd->add_option("--summary", args->summary, "Summary JSON (frames, p50/p95/p99_ms, bytes_read, ...)");
+    cmd->add_option("--frames-dir", args->framesDir, "Write every frame as PNG here");
+    cmd->add_flag("--error", args->error, "Also render each frame with everything resident and report PSNR and holes");
+    return [args]() { return runReplay(*args); };
+}
+
+} // namespace ff::viewer
