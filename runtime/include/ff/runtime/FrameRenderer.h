@@ -8,6 +8,7 @@
 #include <ff/storage/SceneFile.h>
 #include <ff/storage/Status.h>
 
+#include <cstdint>
 #include <memory>
 
 namespace ff::runtime {
@@ -34,6 +35,13 @@ public:
     /** Renders width x height, supersampled `supersample` x `supersample` (1 = none). */
     [[nodiscard]] Result<Frame> render(
             const Camera& camera, SelectionOptions selection, int width, int height, int supersample = 1);
+
+    /** Selects and draws width x height into the default framebuffer (Renderer::present): a
+     *  window's back buffer, no readback. Returns the frame's statistics. */
+    [[nodiscard]] Result<FrameStats> present(const Camera& camera, SelectionOptions selection, int width, int height);
+
+    /** Bytes of geometry pages resident in GPU memory (Renderer::residentBytes). */
+    [[nodiscard]] std::uint64_t gpuResidentBytes() const noexcept { return mRenderer->residentBytes(); }
 
     const DrawList& lastDrawList() const noexcept { return mDrawList; }
     /** Page failures first met by the last frame (each reported once). */
