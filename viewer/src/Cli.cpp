@@ -20,6 +20,7 @@ int runCli(int argc, char** argv) {
             {"render", addRenderCommand(app)},
             {"check", addCheckCommand(app)},
             {"bench", addBenchCommand(app)},
+            {"view", addViewCommand(app)},
     };
     try {
         app.parse(argc, argv);

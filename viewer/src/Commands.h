@@ -16,6 +16,7 @@ CommandRunner addBuildCommand(CLI::App& app);
 CommandRunner addRenderCommand(CLI::App& app);
 CommandRunner addCheckCommand(CLI::App& app);
 CommandRunner addBenchCommand(CLI::App& app);
+CommandRunner addViewCommand(CLI::App& app);
 
 /** Prints "farfield <verb>: <message>" to stderr; returns the exit code for the error. */
 int reportError(const char* verb, const ff::Status& status);
