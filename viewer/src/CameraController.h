@@ -21,7 +21,8 @@ enum class NavigationMode { Orbit, Fly };
 class CameraController {
 public:
     /** Starts at `initial` (shown exactly as given), orbiting about `pivot`. */
-    CameraController(const runtime::Camera& initial, const glm::vec3& pivot, const runtime::Bounds& bounds);
+    CameraController(
+            const runtime::Camera& initial, const glm::vec3& pivot, const runtime::Bounds& bounds);
 
     /** Applies one frame of input; `seconds` is the frame's duration, `viewportHeight` the
      *  window's height in screen pixels (for panning). */

@@ -69,17 +69,35 @@ std::string formatHud(const HudInfo& info) {
     char line[256];
     std::string text;
     const double fps = info.frameMs > 0.0 ? 1000.0 / info.frameMs : 0.0;
-    std::snprintf(line, sizeof(line), "%.1f fps  %.1f ms/frame (select %.1f, draw %.1f)  %dx%d\n", fps,
-                  info.frameMs, info.selectMs, info.drawMs, info.width, info.height);
+    std::snprintf(
+            line,
+            sizeof(line),
+            "%.1f fps  %.1f ms/frame (select %.1f, draw %.1f)  %dx%d\n",
+            fps,
+            info.frameMs,
+            info.selectMs,
+            info.drawMs,
+            info.width,
+            info.height);
     text += line;
-    std::snprintf(line, sizeof(line), "eps %g px  method %s  nav %s\n", static_cast<double>(info.epsilonPixels),
-                  info.method == runtime::Method::Full ? "full" : "hierarchical", info.navigation);
+    std::snprintf(
+            line,
+            sizeof(line),
+            "eps %g px  method %s  nav %s\n",
+            static_cast<double>(info.epsilonPixels),
+            info.method == runtime::Method::Full ? "full" : "hierarchical",
+            info.navigation);
     text += line;
-    text += "triangles " + withThousands(info.trianglesDrawn) + "  cubes " + withThousands(info.cubesDrawn) +
-            "  deferred " + withThousands(info.debt) + "\n";
-    std::snprintf(line, sizeof(line), "resident %.1f MB  %s budget %s  requests %llu\n",
-                  static_cast<double>(info.residentBytes) / 1e6, info.budgetName, formatBytes(info.budgetBytes).c_str(),
-                  static_cast<unsigned long long>(info.requestsInFlight));
+    text += "triangles " + withThousands(info.trianglesDrawn) + "  cubes " +
+            withThousands(info.cubesDrawn) + "  deferred " + withThousands(info.debt) + "\n";
+    std::snprintf(
+            line,
+            sizeof(line),
+            "resident %.1f MB  %s budget %s  requests %llu\n",
+            static_cast<double>(info.residentBytes) / 1e6,
+            info.budgetName,
+            formatBytes(info.budgetBytes).c_str(),
+            static_cast<unsigned long long>(info.requestsInFlight));
     text += line;
     text += "[ ] eps  M method  - = budget  Tab orbit/fly  R reset  P shot  H hud  Esc quit";
     return text;
@@ -118,7 +136,9 @@ Result<std::unique_ptr<Hud>> Hud::create() {
     glBindVertexArray(0);
     hud->mScratch.resize(kMaxTextBytes * kBytesPerChar);
     if (const GLenum error = glGetError(); error != GL_NO_ERROR)
-        return Status(ErrorCode::Internal, "OpenGL error " + std::to_string(error) + " while creating the HUD");
+        return Status(
+                ErrorCode::Internal,
+                "OpenGL error " + std::to_string(error) + " while creating the HUD");
     return hud;
 }
 
@@ -135,14 +155,20 @@ void Hud::draw(const std::string& text, glm::ivec2 framebufferSize) {
     mText.assign(text, 0, kMaxTextBytes);
     // Quad 0 is the panel behind the text; stb_easy_font's quads follow it.
     auto* vertices = reinterpret_cast<FontVertex*>(mScratch.data());
-    const int textQuads = stb_easy_font_print(kMargin, kMargin, mText.data(), nullptr, vertices + 4,
-                                              static_cast<int>(mScratch.size() - 4 * sizeof(FontVertex)));
+    const int textQuads = stb_easy_font_print(
+            kMargin,
+            kMargin,
+            mText.data(),
+            nullptr,
+            vertices + 4,
+            static_cast<int>(mScratch.size() - 4 * sizeof(FontVertex)));
     const auto width = static_cast<float>(stb_easy_font_width(mText.data())) + 2.0f * kMargin;
     const auto height = static_cast<float>(stb_easy_font_height(mText.data())) + 2.0f * kMargin;
-    const FontVertex panel[4] = {{0, 0, 0, {0, 0, 0, 150}},
-                                 {width, 0, 0, {0, 0, 0, 150}},
-                                 {width, height, 0, {0, 0, 0, 150}},
-                                 {0, height, 0, {0, 0, 0, 150}}};
+    const FontVertex panel[4] = {
+            {0, 0, 0, {0, 0, 0, 150}},
+            {width, 0, 0, {0, 0, 0, 150}},
+            {width, height, 0, {0, 0, 0, 150}},
+            {0, height, 0, {0, 0, 0, 150}}};
     std::memcpy(vertices, panel, sizeof(panel));
     const auto quads = static_cast<std::size_t>(textQuads) + 1;
 
@@ -151,7 +177,8 @@ void Hud::draw(const std::string& text, glm::ivec2 framebufferSize) {
     glBindBuffer(GL_ARRAY_BUFFER, mVertices);
     if (vertexBytes > mVertexCapacity) {
         mVertexCapacity = std::max(vertexBytes, 2 * mVertexCapacity);
-        glBufferData(GL_ARRAY_BUFFER, static_cast<GLsizeiptr>(mVertexCapacity), nullptr, GL_STREAM_DRAW);
+        glBufferData(
+                GL_ARRAY_BUFFER, static_cast<GLsizeiptr>(mVertexCapacity), nullptr, GL_STREAM_DRAW);
     }
     glBufferSubData(GL_ARRAY_BUFFER, 0, static_cast<GLsizeiptr>(vertexBytes), vertices);
     if (quads > mIndexQuads) { // two triangles per quad, shared by every frame
@@ -162,8 +189,11 @@ void Hud::draw(const std::string& text, glm::ivec2 framebufferSize) {
             const GLuint quad[6] = {v, v + 1, v + 2, v, v + 2, v + 3};
             std::copy(quad, quad + 6, indices.begin() + static_cast<std::ptrdiff_t>(6 * q));
         }
-        glBufferData(GL_ELEMENT_ARRAY_BUFFER, static_cast<GLsizeiptr>(indices.size() * sizeof(GLuint)),
-                     indices.data(), GL_STATIC_DRAW);
+        glBufferData(
+                GL_ELEMENT_ARRAY_BUFFER,
+                static_cast<GLsizeiptr>(indices.size() * sizeof(GLuint)),
+                indices.data(),
+                GL_STATIC_DRAW);
     }
 
     // Larger windows get larger letters (stb_easy_font's glyphs are ~7 pixels tall).
@@ -176,8 +206,10 @@ void Hud::draw(const std::string& text, glm::ivec2 framebufferSize) {
     glEnable(GL_BLEND);
     glBlendFunc(GL_SRC_ALPHA, GL_ONE_MINUS_SRC_ALPHA);
     glUseProgram(mProgram);
-    glUniform2f(glGetUniformLocation(mProgram, "uPixelToClip"), 2.0f * scale / static_cast<float>(framebufferSize.x),
-                2.0f * scale / static_cast<float>(framebufferSize.y));
+    glUniform2f(
+            glGetUniformLocation(mProgram, "uPixelToClip"),
+            2.0f * scale / static_cast<float>(framebufferSize.x),
+            2.0f * scale / static_cast<float>(framebufferSize.y));
     glDrawElements(GL_TRIANGLES, static_cast<GLsizei>(quads * 6), GL_UNSIGNED_INT, nullptr);
     glDisable(GL_BLEND);
     glBindVertexArray(0);

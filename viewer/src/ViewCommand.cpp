@@ -13,8 +13,8 @@
 #include <nlohmann/json.hpp>
 
 #include <charconv>
-#include <cmath>
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <memory>
@@ -58,11 +58,16 @@ Result<ScriptStep> parseScript(std::string_view text) {
         text = comma == std::string_view::npos ? std::string_view() : text.substr(comma + 1);
         const std::size_t colon = item.find(':');
         const std::string_view name = item.substr(0, colon);
-        const std::string_view number = colon == std::string_view::npos ? std::string_view() : item.substr(colon + 1);
+        const std::string_view number =
+                colon == std::string_view::npos ? std::string_view() : item.substr(colon + 1);
         float value = 0.0f;
-        const auto [end, error] = std::from_chars(number.data(), number.data() + number.size(), value);
-        if (number.empty() || error != std::errc() || end != number.data() + number.size() || !std::isfinite(value))
-            return Status(ErrorCode::InvalidArgument, "--script: expected NAME:NUMBER, got '" + std::string(item) + "'");
+        const auto [end, error] =
+                std::from_chars(number.data(), number.data() + number.size(), value);
+        if (number.empty() || error != std::errc() || end != number.data() + number.size() ||
+            !std::isfinite(value))
+            return Status(
+                    ErrorCode::InvalidArgument,
+                    "--script: expected NAME:NUMBER, got '" + std::string(item) + "'");
         if (name == "orbit")
             step.orbitDegrees = value;
         else if (name == "elevate")
@@ -70,21 +75,26 @@ Result<ScriptStep> parseScript(std::string_view text) {
         else if (name == "zoom" && value > 0.0f)
             step.zoomFactor = value;
         else
-            return Status(ErrorCode::InvalidArgument, "--script: unknown step '" + std::string(item) +
-                                                              "' (orbit:DEG, elevate:DEG, zoom:FACTOR > 0)");
+            return Status(
+                    ErrorCode::InvalidArgument,
+                    "--script: unknown step '" + std::string(item) +
+                            "' (orbit:DEG, elevate:DEG, zoom:FACTOR > 0)");
     }
     return step;
 }
 
 /** The point the initial view orbits about: --target if given, else the scene centre's depth
  *  straight ahead (the centre itself for the default orbit camera). */
-glm::vec3 initialPivot(const runtime::Camera& camera, const runtime::Bounds& bounds, const ViewArgs& args) {
+glm::vec3
+initialPivot(const runtime::Camera& camera, const runtime::Bounds& bounds, const ViewArgs& args) {
     if (!args.camera.target.empty() && args.camera.camera.empty()) {
         if (auto target = parseVec3(args.camera.target))
             return *target;
     }
     const float depth = glm::dot(bounds.center() - camera.eye, camera.forward);
-    return camera.eye + camera.forward * (depth > 1e-3f * bounds.radius() ? depth : std::max(bounds.radius(), 1e-3f));
+    return camera.eye +
+           camera.forward *
+                   (depth > 1e-3f * bounds.radius() ? depth : std::max(bounds.radius(), 1e-3f));
 }
 
 /** screenshot-0001.png, -0002, ...: the first name not taken in `dir`. */
@@ -104,7 +114,9 @@ int runView(const ViewArgs& args) {
     if (!size)
         return reportError("view", size.status().withContext("--size"));
     if (args.method != "hierarchical" && args.method != "full")
-        return reportError("view", Status(ErrorCode::InvalidArgument, "--method must be hierarchical or full"));
+        return reportError(
+                "view",
+                Status(ErrorCode::InvalidArgument, "--method must be hierarchical or full"));
     if (!(args.epsilon >= 0.0f))
         return reportError("view", Status(ErrorCode::InvalidArgument, "--epsilon must be >= 0"));
     if (args.frames < 0)
@@ -136,7 +148,8 @@ int runView(const ViewArgs& args) {
     WindowOptions windowOptions;
     windowOptions.width = size->x;
     windowOptions.height = size->y;
-    windowOptions.title = "farfield view - " + std::filesystem::path(args.scene).filename().string();
+    windowOptions.title =
+            "farfield view - " + std::filesystem::path(args.scene).filename().string();
     windowOptions.resizable = !scripted;
     windowOptions.vsync = !scripted && !args.noVsync;
     auto window = Window::create(windowOptions);
@@ -172,7 +185,8 @@ int runView(const ViewArgs& args) {
     HudInfo hudInfo;
     for (int frame = 0; !(*window)->shouldClose() && (!scripted || frame < frames); ++frame) {
         const glm::ivec2 windowSize = (*window)->framebufferSize();
-        const InputState& input = windowSize.x > 0 && windowSize.y > 0 ? (*window)->poll() : (*window)->wait();
+        const InputState& input =
+                windowSize.x > 0 && windowSize.y > 0 ? (*window)->poll() : (*window)->wait();
         const auto now = Clock::now();
         const double seconds = std::chrono::duration<double>(now - last).count();
         last = now;
@@ -277,25 +291,51 @@ int runView(const ViewArgs& args) {
 
 CommandRunner addViewCommand(CLI::App& app) {
     auto args = std::make_shared<ViewArgs>();
-    CLI::App* cmd = app.add_subcommand("view", "Explore a scene file in a window (GLFW, OpenGL 4.5 core)");
-    cmd->footer(
-            "Keys: left drag orbit, middle drag pan, scroll zoom (orbit mode); W/A/S/D/Q/E move, right drag look,\n"
-            "scroll speed, Shift faster (fly mode); Tab orbit/fly; R reset view; [ ] halve/double epsilon;\n"
-            "M hierarchical/full; - = halve/double the budget; P or F12 screenshot; H HUD; Esc quit.\n"
-            "Scripted (no human): --frames N [--script orbit:DEG] --screenshot OUT.png renders N frames, writes the\n"
-            "last one (without the HUD) and exits 0; no display or no OpenGL 4.5: a message and exit 1.");
+    CLI::App* cmd =
+            app.add_subcommand("view", "Explore a scene file in a window (GLFW, OpenGL 4.5 core)");
+    cmd->footer("Keys: left drag orbit, middle drag pan, scroll zoom (orbit mode); W/A/S/D/Q/E "
+                "move, right drag look,\n"
+                "scroll speed, Shift faster (fly mode); Tab orbit/fly; R reset view; [ ] "
+                "halve/double epsilon;\n"
+                "M hierarchical/full; - = halve/double the budget; P or F12 screenshot; H HUD; Esc "
+                "quit.\n"
+                "Scripted (no human): --frames N [--script orbit:DEG] --screenshot OUT.png renders "
+                "N frames, writes the\n"
+                "last one (without the HUD) and exits 0; no display or no OpenGL 4.5: a message "
+                "and exit 1.");
     cmd->add_option("scene", args->scene, "Scene file (.ffs)")->required();
     cmd->add_option("--size", args->size, "Window size WIDTHxHEIGHT")->capture_default_str();
-    cmd->add_option("--epsilon", args->epsilon, "Cells smaller than this many pixels are drawn as color cubes (0: all geometry)")->capture_default_str();
-    cmd->add_option("--method", args->method, "hierarchical or full (every triangle, no hierarchy)")->capture_default_str();
-    cmd->add_option("--gpu-budget", args->gpuBudget, "GPU memory for geometry pages")->capture_default_str();
-    cmd->add_option("--background", args->background, "Background colour, linear r,g,b")->capture_default_str();
-    cmd->add_option("--frames", args->frames, "Render this many frames, then exit (0: until the window closes)")->capture_default_str();
-    cmd->add_option("--screenshot", args->screenshot, "Write the last frame here (.png, ...) and exit; implies --frames 1 if unset");
-    cmd->add_option("--screenshot-dir", args->screenshotDir, "Where P/F12 write screenshot-NNNN.png")->capture_default_str();
-    cmd->add_option("--script", args->script, "Camera motion per frame after the first, e.g. orbit:5,elevate:1,zoom:0.98 (with --frames)");
+    cmd->add_option(
+               "--epsilon",
+               args->epsilon,
+               "Cells smaller than this many pixels are drawn as color cubes (0: all geometry)")
+            ->capture_default_str();
+    cmd->add_option("--method", args->method, "hierarchical or full (every triangle, no hierarchy)")
+            ->capture_default_str();
+    cmd->add_option("--gpu-budget", args->gpuBudget, "GPU memory for geometry pages")
+            ->capture_default_str();
+    cmd->add_option("--background", args->background, "Background colour, linear r,g,b")
+            ->capture_default_str();
+    cmd->add_option(
+               "--frames",
+               args->frames,
+               "Render this many frames, then exit (0: until the window closes)")
+            ->capture_default_str();
+    cmd->add_option(
+            "--screenshot",
+            args->screenshot,
+            "Write the last frame here (.png, ...) and exit; implies --frames 1 if unset");
+    cmd->add_option(
+               "--screenshot-dir", args->screenshotDir, "Where P/F12 write screenshot-NNNN.png")
+            ->capture_default_str();
+    cmd->add_option(
+            "--script",
+            args->script,
+            "Camera motion per frame after the first, e.g. orbit:5,elevate:1,zoom:0.98 (with "
+            "--frames)");
     cmd->add_flag("--no-hud", args->noHud, "Start with the HUD hidden (H toggles it)");
-    cmd->add_flag("--no-vsync", args->noVsync, "Do not wait for the display's refresh between frames");
+    cmd->add_flag(
+            "--no-vsync", args->noVsync, "Do not wait for the display's refresh between frames");
     args->camera.addTo(*cmd);
     return [args]() { return runView(*args); };
 }

@@ -20,28 +20,47 @@ std::string lastGlfwError() {
 
 std::optional<Key> toKey(int glfwKey) {
     switch (glfwKey) {
-    case GLFW_KEY_W: return Key::W;
-    case GLFW_KEY_A: return Key::A;
-    case GLFW_KEY_S: return Key::S;
-    case GLFW_KEY_D: return Key::D;
-    case GLFW_KEY_Q: return Key::Q;
-    case GLFW_KEY_E: return Key::E;
+    case GLFW_KEY_W:
+        return Key::W;
+    case GLFW_KEY_A:
+        return Key::A;
+    case GLFW_KEY_S:
+        return Key::S;
+    case GLFW_KEY_D:
+        return Key::D;
+    case GLFW_KEY_Q:
+        return Key::Q;
+    case GLFW_KEY_E:
+        return Key::E;
     case GLFW_KEY_LEFT_SHIFT:
-    case GLFW_KEY_RIGHT_SHIFT: return Key::Shift;
-    case GLFW_KEY_TAB: return Key::Tab;
-    case GLFW_KEY_R: return Key::R;
-    case GLFW_KEY_M: return Key::M;
-    case GLFW_KEY_H: return Key::H;
-    case GLFW_KEY_P: return Key::P;
-    case GLFW_KEY_F12: return Key::F12;
-    case GLFW_KEY_ESCAPE: return Key::Escape;
-    case GLFW_KEY_LEFT_BRACKET: return Key::LeftBracket;
-    case GLFW_KEY_RIGHT_BRACKET: return Key::RightBracket;
+    case GLFW_KEY_RIGHT_SHIFT:
+        return Key::Shift;
+    case GLFW_KEY_TAB:
+        return Key::Tab;
+    case GLFW_KEY_R:
+        return Key::R;
+    case GLFW_KEY_M:
+        return Key::M;
+    case GLFW_KEY_H:
+        return Key::H;
+    case GLFW_KEY_P:
+        return Key::P;
+    case GLFW_KEY_F12:
+        return Key::F12;
+    case GLFW_KEY_ESCAPE:
+        return Key::Escape;
+    case GLFW_KEY_LEFT_BRACKET:
+        return Key::LeftBracket;
+    case GLFW_KEY_RIGHT_BRACKET:
+        return Key::RightBracket;
     case GLFW_KEY_MINUS:
-    case GLFW_KEY_KP_SUBTRACT: return Key::Minus;
+    case GLFW_KEY_KP_SUBTRACT:
+        return Key::Minus;
     case GLFW_KEY_EQUAL:
-    case GLFW_KEY_KP_ADD: return Key::Equal;
-    default: return std::nullopt;
+    case GLFW_KEY_KP_ADD:
+        return Key::Equal;
+    default:
+        return std::nullopt;
     }
 }
 
@@ -59,7 +78,9 @@ struct Window::Impl {
         glfwTerminate();
     }
 
-    static Impl& of(GLFWwindow* window) { return *static_cast<Impl*>(glfwGetWindowUserPointer(window)); }
+    static Impl& of(GLFWwindow* window) {
+        return *static_cast<Impl*>(glfwGetWindowUserPointer(window));
+    }
 
     static void onKey(GLFWwindow* window, int key, int /*scancode*/, int action, int /*mods*/) {
         const std::optional<Key> k = toKey(key);
@@ -92,31 +113,40 @@ struct Window::Impl {
         s.cursor = position;
     }
 
-    static void onScroll(GLFWwindow* window, double /*x*/, double y) { of(window).input.scroll += y; }
+    static void onScroll(GLFWwindow* window, double /*x*/, double y) {
+        of(window).input.scroll += y;
+    }
 };
 
-Window::Window(std::unique_ptr<Impl> impl) : mImpl(std::move(impl)) {}
+Window::Window(std::unique_ptr<Impl> impl)
+    : mImpl(std::move(impl)) {}
 Window::~Window() = default;
 
 Result<std::unique_ptr<Window>> Window::create(const WindowOptions& options) {
     if (!glfwInit())
-        return Status(ErrorCode::Unsupported, "cannot open a window (is DISPLAY set?): " + lastGlfwError());
+        return Status(
+                ErrorCode::Unsupported,
+                "cannot open a window (is DISPLAY set?): " + lastGlfwError());
     auto impl = std::make_unique<Impl>(); // from here on, its destructor terminates GLFW
     glfwWindowHint(GLFW_CONTEXT_VERSION_MAJOR, 4);
     glfwWindowHint(GLFW_CONTEXT_VERSION_MINOR, 5);
     glfwWindowHint(GLFW_OPENGL_PROFILE, GLFW_OPENGL_CORE_PROFILE);
     glfwWindowHint(GLFW_OPENGL_FORWARD_COMPAT, GLFW_TRUE);
     glfwWindowHint(GLFW_RESIZABLE, options.resizable ? GLFW_TRUE : GLFW_FALSE);
-    glfwWindowHint(GLFW_DEPTH_BITS, 0);   // the renderer draws into its own target
+    glfwWindowHint(GLFW_DEPTH_BITS, 0); // the renderer draws into its own target
     glfwWindowHint(GLFW_STENCIL_BITS, 0);
-    glfwWindowHint(GLFW_SAMPLES, 0);      // a multisampled window could not be blitted to
-    impl->window = glfwCreateWindow(options.width, options.height, options.title.c_str(), nullptr, nullptr);
+    glfwWindowHint(GLFW_SAMPLES, 0); // a multisampled window could not be blitted to
+    impl->window = glfwCreateWindow(
+            options.width, options.height, options.title.c_str(), nullptr, nullptr);
     if (!impl->window)
-        return Status(ErrorCode::Unsupported, "cannot create a window with an OpenGL 4.5 core context: " + lastGlfwError());
+        return Status(
+                ErrorCode::Unsupported,
+                "cannot create a window with an OpenGL 4.5 core context: " + lastGlfwError());
     glfwMakeContextCurrent(impl->window);
     const int version = gladLoadGL(glfwGetProcAddress);
     if (GLAD_VERSION_MAJOR(version) * 10 + GLAD_VERSION_MINOR(version) < 45)
-        return Status(ErrorCode::Unsupported, "the window's context does not provide OpenGL 4.5 core");
+        return Status(
+                ErrorCode::Unsupported, "the window's context does not provide OpenGL 4.5 core");
     glfwSwapInterval(options.vsync ? 1 : 0);
     glfwSetWindowUserPointer(impl->window, impl.get());
     glfwSetKeyCallback(impl->window, &Impl::onKey);
@@ -148,9 +178,13 @@ const InputState& Window::wait() {
     return mImpl->input;
 }
 
-bool Window::shouldClose() const { return glfwWindowShouldClose(mImpl->window) != 0; }
+bool Window::shouldClose() const {
+    return glfwWindowShouldClose(mImpl->window) != 0;
+}
 
-void Window::requestClose() { glfwSetWindowShouldClose(mImpl->window, GLFW_TRUE); }
+void Window::requestClose() {
+    glfwSetWindowShouldClose(mImpl->window, GLFW_TRUE);
+}
 
 glm::ivec2 Window::framebufferSize() const {
     glm::ivec2 size(0);
@@ -158,9 +192,13 @@ glm::ivec2 Window::framebufferSize() const {
     return size;
 }
 
-void Window::swapBuffers() { glfwSwapBuffers(mImpl->window); }
+void Window::swapBuffers() {
+    glfwSwapBuffers(mImpl->window);
+}
 
-void Window::setTitle(const std::string& title) { glfwSetWindowTitle(mImpl->window, title.c_str()); }
+void Window::setTitle(const std::string& title) {
+    glfwSetWindowTitle(mImpl->window, title.c_str());
+}
 
 runtime::Image Window::readBackBuffer() const {
     const glm::ivec2 size = framebufferSize();
@@ -175,7 +213,10 @@ runtime::Image Window::readBackBuffer() const {
     glReadPixels(0, 0, size.x, size.y, GL_RGBA, GL_UNSIGNED_BYTE, rows.data());
     image.rgba.resize(rows.size());
     for (int y = 0; y < size.y; ++y) // GL rows run bottom-up
-        std::memcpy(image.pixel(0, size.y - 1 - y), rows.data() + static_cast<std::size_t>(y) * rowBytes, rowBytes);
+        std::memcpy(
+                image.pixel(0, size.y - 1 - y),
+                rows.data() + static_cast<std::size_t>(y) * rowBytes,
+                rowBytes);
     for (std::size_t i = 3; i < image.rgba.size(); i += 4)
         image.rgba[i] = 255; // the window is opaque whatever its alpha bits hold
     return image;

@@ -14,10 +14,24 @@ namespace ff::viewer {
 
 /** The keys the viewer reacts to (GLFW's key codes stay inside Window.cpp). */
 enum class Key : std::size_t {
-    W, A, S, D, Q, E,
+    W,
+    A,
+    S,
+    D,
+    Q,
+    E,
     Shift,
-    Tab, R, M, H, P, F12, Escape,
-    LeftBracket, RightBracket, Minus, Equal,
+    Tab,
+    R,
+    M,
+    H,
+    P,
+    F12,
+    Escape,
+    LeftBracket,
+    RightBracket,
+    Minus,
+    Equal,
     Count,
 };
 
