@@ -193,7 +193,7 @@ int runView(const ViewArgs& args) {
         smoothedMs = frame == 0 ? 1000.0 * seconds : 0.9 * smoothedMs + 100.0 * seconds;
 
         // Keys.
-        bool screenshot = input.pressed(Key::P) > 0 || input.pressed(Key::F12) > 0;
+        const bool screenshot = input.pressed(Key::P) > 0 || input.pressed(Key::F12) > 0;
         if (input.pressed(Key::Escape))
             (*window)->requestClose();
         if (input.pressed(Key::Tab) % 2)
