@@ -8,6 +8,7 @@ packages=(
     libglm-dev libosmesa6-dev mesa-common-dev python3-glad
     libdraco-dev libtinygltf-dev nlohmann-json3-dev libstb-dev
     libopenimageio-dev libxxhash-dev libcli11-dev
+    libglfw3-dev xvfb xauth
     libgtest-dev
     python3-matplotlib time
 )

@@ -44,4 +44,19 @@ Result<Frame> FrameRenderer::render(
     return frame;
 }
 
+Result<FrameStats> FrameRenderer::present(const Camera& camera, SelectionOptions selection, int width, int height) {
+    using Clock = std::chrono::steady_clock;
+    FrameStats stats;
+    selection.viewportWidth = static_cast<float>(width);
+    selection.viewportHeight = static_cast<float>(height);
+    const auto start = Clock::now();
+    mPages.beginFrame();
+    FF_RETURN_IF_ERROR(mSelection.select(camera, selection, mDrawList, stats));
+    stats.selectMs = std::chrono::duration<double, std::milli>(Clock::now() - start).count();
+    FF_RETURN_IF_ERROR(mRenderer->present(mDrawList, camera, width, height, stats));
+    mPages.endFrame();
+    stats.totalMs = stats.selectMs + stats.drawMs;
+    return stats;
+}
+
 } // namespace ff::runtime

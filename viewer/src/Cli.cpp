@@ -22,6 +22,7 @@ int runCli(int argc, char** argv) {
             {"bench", addBenchCommand(app)},
             {"replay", addReplayCommand(app)},
             {"path", addPathCommand(app)},
+            {"view", addViewCommand(app)},
     };
     try {
         app.parse(argc, argv);

@@ -4,8 +4,10 @@
 
 #include <dlfcn.h>
 
+#include <filesystem>
 #include <memory>
 #include <string>
+#include <system_error>
 
 namespace ff::viewer {
 
@@ -22,8 +24,13 @@ struct Plugin {
 const Plugin& plugin() {
     static const Plugin loaded = [] {
         Plugin p;
-        // The executable's RUNPATH ($ORIGIN) finds the plugin beside it.
-        void* handle = dlopen("libff_oiio.so", RTLD_NOW | RTLD_LOCAL);
+        // Beside the executable. By full path: a bare name would be searched with the RUNPATH
+        // of dlopen's caller, which is the sanitizer runtime in ASan builds, not farfield.
+        std::error_code error;
+        const std::filesystem::path exe = std::filesystem::read_symlink("/proc/self/exe", error);
+        void* handle = error ? nullptr : dlopen((exe.parent_path() / "libff_oiio.so").c_str(), RTLD_NOW | RTLD_LOCAL);
+        if (!handle) // the executable's RUNPATH ($ORIGIN), e.g. where /proc is not mounted
+            handle = dlopen("libff_oiio.so", RTLD_NOW | RTLD_LOCAL);
         if (!handle) {
             p.status = Status(ErrorCode::Unsupported, std::string("cannot load the image plugin: ") + dlerror());
             return p;

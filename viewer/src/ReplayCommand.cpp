@@ -263,7 +263,7 @@ int runReplay(const ReplayArgs& args) {
                 {"misses", now.misses - previous.misses},
                 {"bytes_read", now.bytesRead - previous.bytesRead},
                 {"resident_bytes", now.residentBytes},
-                {"gpu_resident_bytes", (*streaming)->residentGeometryBytes()},
+                {"gpu_resident_bytes", (*streaming)->gpuResidentBytes()},
                 {"in_flight", now.inFlight},
                 {"evicted", now.evicted - previous.evicted},
                 {"dropped", now.dropped - previous.dropped},

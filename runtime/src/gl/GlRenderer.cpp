@@ -116,9 +116,15 @@ struct Renderer::Impl {
     GLuint framebuffer = 0, colorTexture = 0, depthBuffer = 0;
     int targetWidth = 0, targetHeight = 0;
     std::vector<std::uint8_t> readback;
+    // present(): an RGBA8 view of colorTexture to blit from; made on demand, dropped with the target.
+    GLuint presentFramebuffer = 0, presentView = 0;
 
     ~Impl();
     Status ensureTarget(int width, int height);
+    Status ensurePresentSource();
+    /** Draws `list` into the target, cleared to `clearColor` (linear, premultiplied). */
+    Status drawFrame(const DrawList& list, const Camera& camera, int width, int height, int supersample,
+                     const glm::vec4& clearColor, FrameStats& stats);
     Result<std::uint32_t> residentSlot(std::uint64_t page, FrameStats& stats);
     void drawBatch(const glm::mat4& viewProjection);
     Status drawGeometry(const DrawList& list, const glm::mat4& viewProjection, FrameStats& stats);
@@ -136,14 +142,13 @@ Renderer::Impl::~Impl() {
     glDeleteFramebuffers(1, &framebuffer);
     glDeleteTextures(1, &colorTexture);
     glDeleteRenderbuffers(1, &depthBuffer);
+    glDeleteFramebuffers(1, &presentFramebuffer);
+    glDeleteTextures(1, &presentView);
 }
 
 Renderer::Renderer(std::unique_ptr<Impl> impl) : mImpl(std::move(impl)) {}
 Renderer::~Renderer() = default;
 
-std::uint64_t Renderer::residentGeometryBytes() const noexcept {
-    return static_cast<std::uint64_t>(mImpl->slotOfPage.size()) * static_cast<std::uint64_t>(mImpl->slotBytes);
-}
 
 Result<std::unique_ptr<Renderer>> Renderer::create(
         const storage::SceneFile& scene, IPageAccess& pages, const RendererOptions& options) {
@@ -225,6 +230,9 @@ Status Renderer::Impl::ensureTarget(int width, int height) {
     glDeleteFramebuffers(1, &framebuffer);
     glDeleteTextures(1, &colorTexture);
     glDeleteRenderbuffers(1, &depthBuffer);
+    glDeleteFramebuffers(1, &presentFramebuffer);
+    glDeleteTextures(1, &presentView);
+    presentFramebuffer = presentView = 0;
     glGenTextures(1, &colorTexture);
     glBindTexture(GL_TEXTURE_2D, colorTexture);
     glTexStorage2D(GL_TEXTURE_2D, 1, GL_SRGB8_ALPHA8, width, height);
@@ -333,63 +341,74 @@ void Renderer::Impl::drawCubes(const DrawList& list, const glm::mat4& viewProjec
     glDisable(GL_BLEND);
 }
 
+Status Renderer::Impl::drawFrame(
+        const DrawList& list, const Camera& camera, int width, int height, int supersample,
+        const glm::vec4& clearColor, FrameStats& stats) {
+    const int sampleWidth = width * supersample;
+    const int sampleHeight = height * supersample;
+    FF_RETURN_IF_ERROR(ensureTarget(sampleWidth, sampleHeight));
+
+    // Transforms, their normal matrices and the eye in each frame.
+    const auto transformCount = static_cast<GLsizeiptr>(list.transforms.size());
+    normalScratch.resize(list.transforms.size());
+    eyeScratch.resize(list.transforms.size());
+    for (std::size_t i = 0; i < list.transforms.size(); ++i) {
+        normalScratch[i] = glm::mat4(glm::transpose(glm::inverse(glm::mat3(list.transforms[i]))));
+        eyeScratch[i] = glm::vec4(list.localEyes[i], 1.0f);
+    }
+    ensureCapacity(transforms, transformsCap, transformCount * static_cast<GLsizeiptr>(sizeof(glm::mat4)));
+    ensureCapacity(normalMatrices, normalsCap, transformCount * static_cast<GLsizeiptr>(sizeof(glm::mat4)));
+    ensureCapacity(localEyes, eyesCap, transformCount * static_cast<GLsizeiptr>(sizeof(glm::vec4)));
+    bufferSubData(transforms, 0, transformCount * static_cast<GLsizeiptr>(sizeof(glm::mat4)), list.transforms.data());
+    bufferSubData(normalMatrices, 0, transformCount * static_cast<GLsizeiptr>(sizeof(glm::mat4)), normalScratch.data());
+    bufferSubData(localEyes, 0, transformCount * static_cast<GLsizeiptr>(sizeof(glm::vec4)), eyeScratch.data());
+    if (iotaCap < transformCount * static_cast<GLsizeiptr>(sizeof(GLuint))) {
+        std::vector<GLuint> values(static_cast<std::size_t>(std::max<GLsizeiptr>(transformCount * 2, 1024)));
+        for (std::size_t i = 0; i < values.size(); ++i)
+            values[i] = static_cast<GLuint>(i);
+        iotaCap = static_cast<GLsizeiptr>(values.size() * sizeof(GLuint));
+        bufferData(iota, iotaCap, values.data(), GL_STATIC_DRAW);
+        glBindVertexArray(geometryVao);
+        glBindVertexBuffer(1, iota, 0, sizeof(GLuint));
+        glBindVertexArray(0);
+    }
+    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 0, transforms);
+    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 1, normalMatrices);
+    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 2, localEyes);
+
+    glBindFramebuffer(GL_FRAMEBUFFER, framebuffer);
+    glViewport(0, 0, sampleWidth, sampleHeight);
+    glEnable(GL_FRAMEBUFFER_SRGB); // the clear colour and every blend are in linear space
+    glDisable(GL_CULL_FACE);
+    glEnable(GL_DEPTH_TEST);
+    glDepthFunc(GL_LESS);
+    glDepthMask(GL_TRUE);
+    glDisable(GL_BLEND);
+    glClearColor(clearColor.r, clearColor.g, clearColor.b, clearColor.a);
+    glClearDepth(1.0);
+    glClear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
+
+    const glm::mat4 viewProjection =
+            camera.projection(static_cast<float>(width) / static_cast<float>(height)) * camera.view();
+    FF_RETURN_IF_ERROR(drawGeometry(list, viewProjection, stats));
+    drawCubes(list, viewProjection, camera.pixelScale(static_cast<float>(sampleHeight)));
+    return Status::ok();
+}
+
 Result<Image> Renderer::render(
         const DrawList& list, const Camera& camera, int width, int height, int supersample, FrameStats& stats) {
     Impl& s = *mImpl;
     if (width <= 0 || height <= 0 || supersample <= 0)
         return Status(ErrorCode::InvalidArgument, "image size and supersampling must be positive");
     const auto start = std::chrono::steady_clock::now();
-    const int targetWidth = width * supersample;
-    const int targetHeight = height * supersample;
-    FF_RETURN_IF_ERROR(s.ensureTarget(targetWidth, targetHeight));
-
-    // Transforms, their normal matrices and the eye in each frame.
-    const auto transformCount = static_cast<GLsizeiptr>(list.transforms.size());
-    s.normalScratch.resize(list.transforms.size());
-    s.eyeScratch.resize(list.transforms.size());
-    for (std::size_t i = 0; i < list.transforms.size(); ++i) {
-        s.normalScratch[i] = glm::mat4(glm::transpose(glm::inverse(glm::mat3(list.transforms[i]))));
-        s.eyeScratch[i] = glm::vec4(list.localEyes[i], 1.0f);
-    }
-    ensureCapacity(s.transforms, s.transformsCap, transformCount * static_cast<GLsizeiptr>(sizeof(glm::mat4)));
-    ensureCapacity(s.normalMatrices, s.normalsCap, transformCount * static_cast<GLsizeiptr>(sizeof(glm::mat4)));
-    ensureCapacity(s.localEyes, s.eyesCap, transformCount * static_cast<GLsizeiptr>(sizeof(glm::vec4)));
-    bufferSubData(s.transforms, 0, transformCount * static_cast<GLsizeiptr>(sizeof(glm::mat4)), list.transforms.data());
-    bufferSubData(s.normalMatrices, 0, transformCount * static_cast<GLsizeiptr>(sizeof(glm::mat4)), s.normalScratch.data());
-    bufferSubData(s.localEyes, 0, transformCount * static_cast<GLsizeiptr>(sizeof(glm::vec4)), s.eyeScratch.data());
-    if (s.iotaCap < transformCount * static_cast<GLsizeiptr>(sizeof(GLuint))) {
-        std::vector<GLuint> values(static_cast<std::size_t>(std::max<GLsizeiptr>(transformCount * 2, 1024)));
-        for (std::size_t i = 0; i < values.size(); ++i)
-            values[i] = static_cast<GLuint>(i);
-        s.iotaCap = static_cast<GLsizeiptr>(values.size() * sizeof(GLuint));
-        bufferData(s.iota, s.iotaCap, values.data(), GL_STATIC_DRAW);
-        glBindVertexArray(s.geometryVao);
-        glBindVertexBuffer(1, s.iota, 0, sizeof(GLuint));
-        glBindVertexArray(0);
-    }
-    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 0, s.transforms);
-    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 1, s.normalMatrices);
-    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 2, s.localEyes);
-
-    glBindFramebuffer(GL_FRAMEBUFFER, s.framebuffer);
-    glViewport(0, 0, targetWidth, targetHeight);
-    glEnable(GL_FRAMEBUFFER_SRGB);
-    glDisable(GL_CULL_FACE);
-    glEnable(GL_DEPTH_TEST);
-    glDepthFunc(GL_LESS);
-    glDepthMask(GL_TRUE);
-    glDisable(GL_BLEND);
-    glClearColor(0.0f, 0.0f, 0.0f, 0.0f);
-    glClearDepth(1.0);
-    glClear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
-
-    const glm::mat4 viewProjection =
-            camera.projection(static_cast<float>(width) / static_cast<float>(height)) * camera.view();
-    FF_RETURN_IF_ERROR(s.drawGeometry(list, viewProjection, stats));
-    s.drawCubes(list, viewProjection, camera.pixelScale(static_cast<float>(targetHeight)));
+    // Transparent: the background is composited on the CPU, after the resolve, so coverage
+    // survives as alpha.
+    FF_RETURN_IF_ERROR(s.drawFrame(list, camera, width, height, supersample, glm::vec4(0.0f), stats));
     glFinish(); // the frame time is the time until the GPU is done, not until submission
     stats.drawMs += std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
 
+    const int targetWidth = width * supersample;
+    const int targetHeight = height * supersample;
     s.readback.resize(static_cast<std::size_t>(targetWidth) * static_cast<std::size_t>(targetHeight) * 4);
     glPixelStorei(GL_PACK_ALIGNMENT, 1);
     glReadPixels(0, 0, targetWidth, targetHeight, GL_RGBA, GL_UNSIGNED_BYTE, s.readback.data());
@@ -397,6 +416,52 @@ Result<Image> Renderer::render(
     if (const GLenum error = glGetError(); error != GL_NO_ERROR)
         return Status(ErrorCode::Internal, "OpenGL error " + std::to_string(error) + " while rendering");
     return resolveFramebuffer(s.readback, width, height, supersample, s.options.backgroundLinear);
+}
+
+// ---- Presenting to a window ---------------------------------------------------------------
+// The frame is drawn exactly as for render(), except that the target starts as the opaque
+// background, so cubes blend over it on the GPU (in linear space, like resolveFramebuffer
+// does on the CPU). It is then copied byte for byte to the default framebuffer through an
+// RGBA8 view of the sRGB texture: a blit from a UNORM source with GL_FRAMEBUFFER_SRGB off
+// converts nothing on either side, whatever the window's framebuffer encoding is, so the
+// window shows the same sRGB bytes a PNG from render() holds.
+
+Status Renderer::Impl::ensurePresentSource() {
+    if (presentFramebuffer)
+        return Status::ok();
+    glGenTextures(1, &presentView);
+    glTextureView(presentView, GL_TEXTURE_2D, colorTexture, GL_RGBA8, 0, 1, 0, 1);
+    glGenFramebuffers(1, &presentFramebuffer);
+    glBindFramebuffer(GL_READ_FRAMEBUFFER, presentFramebuffer);
+    glFramebufferTexture2D(GL_READ_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_TEXTURE_2D, presentView, 0);
+    const GLenum complete = glCheckFramebufferStatus(GL_READ_FRAMEBUFFER);
+    glBindFramebuffer(GL_READ_FRAMEBUFFER, 0);
+    if (complete != GL_FRAMEBUFFER_COMPLETE)
+        return Status(ErrorCode::Internal, "present framebuffer is incomplete");
+    return Status::ok();
+}
+
+Status Renderer::present(const DrawList& list, const Camera& camera, int width, int height, FrameStats& stats) {
+    Impl& s = *mImpl;
+    if (width <= 0 || height <= 0)
+        return Status(ErrorCode::InvalidArgument, "window size must be positive");
+    const auto start = std::chrono::steady_clock::now();
+    FF_RETURN_IF_ERROR(s.drawFrame(list, camera, width, height, 1, glm::vec4(s.options.backgroundLinear, 1.0f), stats));
+    FF_RETURN_IF_ERROR(s.ensurePresentSource());
+    glDisable(GL_FRAMEBUFFER_SRGB);
+    glBindFramebuffer(GL_READ_FRAMEBUFFER, s.presentFramebuffer);
+    glBindFramebuffer(GL_DRAW_FRAMEBUFFER, 0);
+    glBlitFramebuffer(0, 0, width, height, 0, 0, width, height, GL_COLOR_BUFFER_BIT, GL_NEAREST);
+    glBindFramebuffer(GL_FRAMEBUFFER, 0);
+    // Submission only: the swap that follows waits for the GPU, and the caller times frames.
+    stats.drawMs += std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+    if (const GLenum error = glGetError(); error != GL_NO_ERROR)
+        return Status(ErrorCode::Internal, "OpenGL error " + std::to_string(error) + " while presenting");
+    return Status::ok();
+}
+
+std::uint64_t Renderer::residentBytes() const noexcept {
+    return static_cast<std::uint64_t>(mImpl->slotOfPage.size()) * static_cast<std::uint64_t>(mImpl->slotBytes);
 }
 
 } // namespace ff::runtime

@@ -8,6 +8,7 @@
 #include <ff/storage/SceneFile.h>
 #include <ff/storage/Status.h>
 
+#include <cstdint>
 #include <memory>
 
 namespace ff::runtime {
@@ -35,8 +36,14 @@ public:
     [[nodiscard]] Result<Frame> render(
             const Camera& camera, SelectionOptions selection, int width, int height, int supersample = 1);
 
+    /** Selects and draws width x height into the default framebuffer (Renderer::present): a
+     *  window's back buffer, no readback. Returns the frame's statistics. */
+    [[nodiscard]] Result<FrameStats> present(const Camera& camera, SelectionOptions selection, int width, int height);
+
+    /** Bytes of geometry pages resident in GPU memory (Renderer::residentBytes). */
+    [[nodiscard]] std::uint64_t gpuResidentBytes() const noexcept { return mRenderer->residentBytes(); }
+
     const DrawList& lastDrawList() const noexcept { return mDrawList; }
-    std::uint64_t residentGeometryBytes() const noexcept { return mRenderer->residentGeometryBytes(); }
     /** Page failures first met by the last frame (each reported once). */
     const std::vector<Status>& newFailures() const noexcept { return mSelection.newFailures(); }
 

@@ -47,8 +47,18 @@ public:
     [[nodiscard]] Result<Image> render(
             const DrawList& list, const Camera& camera, int width, int height, int supersample, FrameStats& stats);
 
-    /** Bytes of geometry pages resident in the GPU page arena. */
-    std::uint64_t residentGeometryBytes() const noexcept;
+    /**
+     * Draws the same frame as render(list, camera, width, height, 1, ...) into the default
+     * framebuffer (a window's back buffer) with no CPU readback: rendered over the opaque
+     * background in the renderer's own target, then blitted to (0, 0, width, height) of
+     * framebuffer 0. The window shows the same sRGB bytes as render()'s image (up to rounding of
+     * the background under blended cubes). Leaves framebuffer 0 bound, GL_FRAMEBUFFER_SRGB and
+     * blending off. Does not wait for the GPU (drawMs counts submission only). Errors as render().
+     */
+    [[nodiscard]] Status present(const DrawList& list, const Camera& camera, int width, int height, FrameStats& stats);
+
+    /** Bytes of the GPU page arena holding geometry pages now (at most the GPU budget). */
+    [[nodiscard]] std::uint64_t residentBytes() const noexcept;
 
 private:
     struct Impl;
