@@ -117,6 +117,8 @@ TEST(RenderCommandTest, GltfCameraRendersItsOwnView) {
     const runtime::Image orbit = render("orbit", {});
     const runtime::Image camera = render("camera", {"--camera", "gltf:0"});
     const std::uint64_t pixels = 160u * 120u;
+    ASSERT_EQ(orbit.rgba.size(), pixels * 4);
+    ASSERT_EQ(camera.rgba.size(), pixels * 4);
     EXPECT_GT(coveredPixels(orbit), 0u);
     // The camera sits 1.2 units in front of the right quad's centre with a 46 degree field of
     // view: that quad fills most of the frame, the other is out of view.

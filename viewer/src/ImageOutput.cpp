@@ -29,6 +29,8 @@ const Plugin& plugin() {
         std::error_code error;
         const std::filesystem::path exe = std::filesystem::read_symlink("/proc/self/exe", error);
         void* handle = error ? nullptr : dlopen((exe.parent_path() / "libff_oiio.so").c_str(), RTLD_NOW | RTLD_LOCAL);
+        if (!handle) // where this tree built it: programs linking the viewer elsewhere (tests)
+            handle = dlopen(FF_OIIO_PLUGIN_BUILD_PATH, RTLD_NOW | RTLD_LOCAL);
         if (!handle) // the executable's RUNPATH ($ORIGIN), e.g. where /proc is not mounted
             handle = dlopen("libff_oiio.so", RTLD_NOW | RTLD_LOCAL);
         if (!handle) {

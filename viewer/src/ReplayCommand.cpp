@@ -5,6 +5,7 @@
 #include "CameraOptions.h"
 #include "Commands.h"
 #include "ImageOutput.h"
+#include "StreamingPages.h"
 #include "Units.h"
 
 #include <ff/cache/PageCache.h>
@@ -48,6 +49,7 @@ struct ReplayArgs {
     std::string summary;
     std::string framesDir;
     bool error = false;
+    bool coverage = false;
 };
 
 struct ProcessMemory {
@@ -127,21 +129,13 @@ int runReplay(const ReplayArgs& args) {
     if (!source)
         return reportError("replay", source.status().withContext(args.scene));
     auto counting = std::make_shared<CountingSource>(std::move(*source));
-    cache::PageCacheOptions cacheOptions;
-    cacheOptions.budgetBytes = args.cacheMb << 20;
-    cacheOptions.ioThreads = args.ioThreads;
-    auto pageCache = cache::PageCache::create(counting, cacheOptions);
-    if (!pageCache)
-        return reportError("replay", pageCache.status());
-    runtime::CachedPageAccess access(**pageCache, (*scene)->pageSize());
-
-    // The minimum working set: the root's page must fit and be resident before the first frame.
-    const std::uint64_t rootPage = (*scene)->header().root.page;
-    (*pageCache)->request(rootPage, 1e30f);
-    (*pageCache)->drain();
-    if ((*pageCache)->state(rootPage) != cache::PageState::Resident)
-        return reportError("replay", Status(ErrorCode::OutOfBudget, "--cache-mb " + std::to_string(args.cacheMb) +
-                                                                           " cannot hold the scene's root page"));
+    // --sync is a reference: one reader and no refused requests make it repeatable.
+    auto streamingPages = args.sync ? openStreaming(**scene, counting, args.cacheMb << 20, 1, 1u << 30)
+                                    : openStreaming(**scene, counting, args.cacheMb << 20, args.ioThreads);
+    if (!streamingPages)
+        return reportError("replay", streamingPages.status());
+    cache::PageCache* pageCache = streamingPages->cache.get();
+    runtime::CachedPageAccess& access = *streamingPages->access;
 
     auto context = runtime::OffscreenContext::create();
     if (!context)
@@ -185,7 +179,7 @@ int runReplay(const ReplayArgs& args) {
     bool converged = false;
     glm::vec3 lastEye(NAN);
     const float jump = 0.1f * bounds.radius();
-    cache::PageCacheStats previous = (*pageCache)->stats();
+    cache::PageCacheStats previous = pageCache->stats();
 
     for (std::int64_t f = 0; f < frames; ++f) {
         runtime::Camera camera = path->sample(path->frameTime(f));
@@ -199,16 +193,16 @@ int runReplay(const ReplayArgs& args) {
         lastEye = camera.eye;
 
         const auto start = std::chrono::steady_clock::now();
-        (*pageCache)->pump(args.uploadsPerFrame);
+        pageCache->pump(args.uploadsPerFrame);
         Result<runtime::Frame> frame = (*streaming)->render(camera, selection, size->x, size->y);
         bool stalled = false;
         // --sync: the frame waits for what it lacks (a reference mode; every wait is a stall).
         while (args.sync && frame && frame->stats.nodesDeferred > 0) {
-            const std::uint64_t before = (*pageCache)->stats().completed;
-            (*pageCache)->drain();
+            const std::uint64_t before = pageCache->stats().completed;
+            pageCache->drain();
             stalled = true;
             frame = (*streaming)->render(camera, selection, size->x, size->y);
-            if ((*pageCache)->stats().completed == before)
+            if (pageCache->stats().completed == before)
                 break; // nothing more fits the budget: this frame is as good as it gets
         }
         if (!frame)
@@ -217,7 +211,7 @@ int runReplay(const ReplayArgs& args) {
         const auto& fresh = (*streaming)->newFailures();
         failures.insert(failures.end(), fresh.begin(), fresh.end());
 
-        const cache::PageCacheStats& now = (*pageCache)->stats();
+        const cache::PageCacheStats& now = pageCache->stats();
         peakResident = std::max(peakResident, now.residentBytes);
         const ProcessMemory memory = processMemory();
         peakMemory.anonBytes = std::max(peakMemory.anonBytes, memory.anonBytes);
@@ -248,7 +242,7 @@ int runReplay(const ReplayArgs& args) {
         if (!args.framesDir.empty()) {
             char name[32];
             std::snprintf(name, sizeof(name), "frame-%05lld.png", static_cast<long long>(f));
-            if (Status written = writeImage(std::filesystem::path(args.framesDir) / name, frame->image); !written)
+            if (Status written = writeImage(std::filesystem::path(args.framesDir) / name, frame->image, args.coverage); !written)
                 return reportError("replay", written);
         }
 
@@ -288,7 +282,7 @@ int runReplay(const ReplayArgs& args) {
     if (!converged)
         maxFramesToFullQuality = std::max(maxFramesToFullQuality, sinceJump);
 
-    const cache::PageCacheStats& total = (*pageCache)->stats();
+    const cache::PageCacheStats& total = pageCache->stats();
     const std::uint64_t uniqueBytes = counting->uniquePages() * (*scene)->pageSize();
     const nlohmann::json summary = {
             {"scene", args.scene},
@@ -302,7 +296,7 @@ int runReplay(const ReplayArgs& args) {
             {"unique_bytes", uniqueBytes},
             {"over_fetch", uniqueBytes ? static_cast<double>(total.bytesRead) / static_cast<double>(uniqueBytes) : 0.0},
             {"peak_resident_bytes", peakResident},
-            {"budget_bytes", (*pageCache)->budgetBytes()},
+            {"budget_bytes", pageCache->budgetBytes()},
             {"debt_frames", debtFrames},
             {"stalled_frames", stalledFrames},
             {"max_frames_to_full_quality", maxFramesToFullQuality},
@@ -350,6 +344,7 @@ CommandRunner addReplayCommand(CLI::App& app) {
     cmd->add_option("--json", args->json, "Per-frame telemetry as JSON");
     cmd->add_option("--summary", args->summary, "Summary JSON (frames, p50/p95/p99_ms, bytes_read, ...)");
     cmd->add_option("--frames-dir", args->framesDir, "Write every frame as PNG here");
+    cmd->add_flag("--coverage-alpha", args->coverage, "Frames written with coverage as alpha");
     cmd->add_flag("--error", args->error, "Also render each frame with everything resident and report PSNR and holes");
     return [args]() { return runReplay(*args); };
 }

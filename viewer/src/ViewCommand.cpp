@@ -3,10 +3,12 @@
 #include "Commands.h"
 #include "Hud.h"
 #include "ImageOutput.h"
+#include "StreamingPages.h"
 #include "Units.h"
 #include "ViewerControls.h"
 #include "Window.h"
 
+#include <ff/cache/ScenePageSource.h>
 #include <ff/runtime/FrameRenderer.h>
 #include <ff/storage/SceneFile.h>
 
@@ -18,6 +20,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <memory>
+#include <optional>
 #include <string>
 #include <string_view>
 #include <system_error>
@@ -32,6 +35,8 @@ struct ViewArgs {
     float epsilon = 1.0f;
     std::string method = "hierarchical";
     std::string gpuBudget = "512MiB";
+    std::uint64_t cacheMb = 0;
+    std::size_t uploadsPerFrame = 64;
     std::string background = "0.70,0.75,0.83";
     int frames = 0;
     std::string screenshot;
@@ -165,11 +170,24 @@ int runView(const ViewArgs& args) {
     controls.method = args.method == "full" ? runtime::Method::Full : runtime::Method::Hierarchical;
     controls.gpuBudgetBytes = *gpuBudget;
     controls.hudVisible = !args.noHud;
+    // --cache-mb streams pages through the page cache; without it every page is mapped.
+    std::optional<StreamingPages> streaming;
+    if (args.cacheMb > 0) {
+        auto source = cache::ScenePageSource::open(args.scene);
+        if (!source)
+            return reportError("view", source.status().withContext(args.scene));
+        auto pages = openStreaming(**scene, std::move(*source), args.cacheMb << 20, 2);
+        if (!pages)
+            return reportError("view", pages.status());
+        streaming = std::move(*pages);
+        controls.cacheBudgetBytes = args.cacheMb << 20;
+    }
     const auto makeRenderer = [&]() {
         runtime::RendererOptions options;
         options.gpuBudgetBytes = controls.gpuBudgetBytes;
         options.backgroundLinear = *background;
-        return runtime::FrameRenderer::create(**scene, options);
+        return streaming ? runtime::FrameRenderer::create(**scene, *streaming->access, options)
+                         : runtime::FrameRenderer::create(**scene, options);
     };
     auto renderer = makeRenderer();
     if (!renderer)
@@ -209,10 +227,13 @@ int runView(const ViewArgs& args) {
         if (input.pressed(Key::H) % 2)
             controls.hudVisible = !controls.hudVisible;
         const std::uint64_t budgetBefore = controls.gpuBudgetBytes;
+        const std::uint64_t cacheBudgetBefore = controls.cacheBudgetBytes;
         for (int i = 0; i < input.pressed(Key::Minus); ++i)
             controls.halveBudget();
         for (int i = 0; i < input.pressed(Key::Equal); ++i)
             controls.doubleBudget();
+        if (streaming && controls.cacheBudgetBytes != cacheBudgetBefore)
+            streaming->cache->setBudget(controls.cacheBudgetBytes);
         if (controls.gpuBudgetBytes != budgetBefore) {
             renderer->reset(); // frees the old page arena before the new one is allocated
             renderer = makeRenderer();
@@ -237,6 +258,8 @@ int runView(const ViewArgs& args) {
         selection.method = controls.method;
         selection.epsilonPixels = controls.epsilonPixels;
         const runtime::Camera camera = navigation.camera();
+        if (streaming)
+            streaming->cache->pump(args.uploadsPerFrame); // finished reads, under an upload budget
         auto stats = (*renderer)->present(camera, selection, windowSize.x, windowSize.y);
         if (!stats)
             return reportError("view", stats.status().withContext(args.scene));
@@ -274,10 +297,10 @@ int runView(const ViewArgs& args) {
             hudInfo.trianglesDrawn = stats->trianglesDrawn;
             hudInfo.cubesDrawn = stats->cubesDrawn;
             hudInfo.debt = stats->nodesDeferred;
-            hudInfo.residentBytes = (*renderer)->gpuResidentBytes();
+            hudInfo.residentBytes = streaming ? streaming->cache->stats().residentBytes : (*renderer)->gpuResidentBytes();
             hudInfo.budgetBytes = controls.adjustableBudget();
             hudInfo.budgetName = controls.cacheBudgetBytes ? "cache" : "gpu";
-            hudInfo.requestsInFlight = 0; // no streaming cache yet: every page is mapped
+            hudInfo.requestsInFlight = streaming ? streaming->cache->stats().inFlight : 0;
             hudInfo.width = windowSize.x;
             hudInfo.height = windowSize.y;
             (*hud)->draw(formatHud(hudInfo), windowSize);
@@ -311,6 +334,10 @@ CommandRunner addViewCommand(CLI::App& app) {
                "Cells smaller than this many pixels are drawn as color cubes (0: all geometry)")
             ->capture_default_str();
     cmd->add_option("--method", args->method, "hierarchical or full (every triangle, no hierarchy)")
+            ->capture_default_str();
+    cmd->add_option("--cache-mb", args->cacheMb, "Stream pages through a page cache of this many MiB (0: map everything)")
+            ->capture_default_str();
+    cmd->add_option("--uploads-per-frame", args->uploadsPerFrame, "Finished page reads installed per frame at most")
             ->capture_default_str();
     cmd->add_option("--gpu-budget", args->gpuBudget, "GPU memory for geometry pages")
             ->capture_default_str();

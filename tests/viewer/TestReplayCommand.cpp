@@ -1,0 +1,167 @@
+// `farfield path` + `farfield replay`: the paging-behaviour tool end to end. Budgets hold,
+// --sync is deterministic, a cold cache still covers the screen from the first frame, a budget
+// below the root page is refused, and a corrupt page fails only its subtree.
+
+#include "FarfieldProcess.h"
+
+#include <ff/storage/SceneFile.h>
+
+#include <gtest/gtest.h>
+
+#include <fstream>
+#include <sstream>
+#include <string>
+#include <vector>
+
+namespace ff::viewer::test {
+namespace {
+
+namespace fs = std::filesystem;
+using json = nlohmann::json;
+
+fs::path buildForest(const fs::path& dir, const std::string& pageSize = "16KiB") {
+    const fs::path scene = dir / "forest.ffs";
+    const ProcessResult built = runFarfield(
+            {"build", "-q", "--generate", "forest:trees=16", "--page-size", pageSize, "-o", scene.string()}, dir);
+    EXPECT_EQ(built.exitCode, 0) << built.describe();
+    return scene;
+}
+
+fs::path makePath(const fs::path& dir, const fs::path& scene, const std::string& kind, int frames) {
+    const fs::path path = dir / (kind + ".json");
+    std::vector<std::string> args = {"path", kind, scene.string(), "-o", path.string(), "--frames", std::to_string(frames)};
+    if (kind == "teleports")
+        args.insert(args.end(), {"--teleports", "3", "--seed", "11"});
+    const ProcessResult made = runFarfield(args, dir);
+    EXPECT_EQ(made.exitCode, 0) << made.describe();
+    return path;
+}
+
+std::vector<json> readFrames(const fs::path& path) {
+    const json frames = readJsonFile(path);
+    return frames.is_array() ? std::vector<json>(frames.begin(), frames.end()) : std::vector<json>{};
+}
+
+TEST(ReplayCommandTest, ResidentBytesStayWithinTheBudgetAlongAPath) {
+    const fs::path dir = freshTestDir();
+    const fs::path scene = buildForest(dir);
+    const fs::path path = makePath(dir, scene, "teleports", 24);
+    const fs::path frames = dir / "frames.json";
+    const fs::path summary = dir / "summary.json";
+    // 1 MiB: far less than the scene's pages, so eviction and coarser drawing must happen.
+    const ProcessResult run = runFarfield(
+            {"replay", scene.string(), path.string(), "--cache-mb", "1", "--size", "160x120", "--json",
+             frames.string(), "--summary", summary.string()},
+            dir);
+    ASSERT_EQ(run.exitCode, 0) << run.describe();
+    const json s = readJsonFile(summary);
+    ASSERT_TRUE(s.is_object());
+    for (const char* key : {"frames", "p50_ms", "p95_ms", "p99_ms", "bytes_read", "unique_bytes", "peak_resident_bytes",
+                            "budget_bytes", "debt_frames", "stalled_frames", "max_frames_to_full_quality"})
+        EXPECT_TRUE(s.contains(key)) << key;
+    EXPECT_EQ(s["frames"], 24);
+    EXPECT_EQ(s["budget_bytes"], 1u << 20);
+    EXPECT_LE(s["peak_resident_bytes"].get<std::uint64_t>(), 1u << 20);
+    EXPECT_GT(s["bytes_read"].get<std::uint64_t>(), 0u);
+    EXPECT_EQ(s["stalled_frames"], 0); // asynchronous: no frame waits
+    for (const json& f : readFrames(frames))
+        EXPECT_LE(f["resident_bytes"].get<std::uint64_t>(), 1u << 20) << "frame " << f["frame"];
+}
+
+TEST(ReplayCommandTest, SyncModeIsDeterministicAndCompletesEveryFrame) {
+    const fs::path dir = freshTestDir();
+    const fs::path scene = buildForest(dir);
+    const fs::path path = makePath(dir, scene, "orbit", 8);
+    std::vector<std::vector<json>> runs;
+    for (int r = 0; r < 2; ++r) {
+        const fs::path frames = dir / ("frames" + std::to_string(r) + ".json");
+        const ProcessResult run = runFarfield(
+                {"replay", scene.string(), path.string(), "--sync", "--cache-mb", "64", "--size", "160x120", "--json",
+                 frames.string()},
+                dir);
+        ASSERT_EQ(run.exitCode, 0) << run.describe();
+        runs.push_back(readFrames(frames));
+    }
+    ASSERT_EQ(runs[0].size(), 8u);
+    ASSERT_EQ(runs[1].size(), 8u);
+    for (std::size_t f = 0; f < runs[0].size(); ++f) {
+        EXPECT_EQ(runs[0][f]["nodes_deferred"], 0) << "frame " << f; // the budget holds the view
+        for (const char* key : {"requests", "bytes_read", "resident_bytes", "triangles", "cubes", "evicted"})
+            EXPECT_EQ(runs[0][f][key], runs[1][f][key]) << key << " in frame " << f;
+    }
+}
+
+TEST(ReplayCommandTest, ColdCacheCoversTheScreenFromTheFirstFrame) {
+    const fs::path dir = freshTestDir();
+    const fs::path scene = buildForest(dir);
+    const fs::path path = makePath(dir, scene, "orbit", 1);
+    const fs::path framesDir = dir / "frames";
+    const ProcessResult replay = runFarfield(
+            {"replay", scene.string(), path.string(), "--cache-mb", "64", "--size", "160x120", "--frames-dir",
+             framesDir.string(), "--coverage-alpha"},
+            dir);
+    ASSERT_EQ(replay.exitCode, 0) << replay.describe();
+    const fs::path reference = dir / "reference.png";
+    const ProcessResult render = runFarfield(
+            {"render", scene.string(), "--path", path.string(), "--path-frame", "0", "--size", "160x120",
+             "--coverage-alpha", "-o", reference.string()},
+            dir);
+    ASSERT_EQ(render.exitCode, 0) << render.describe();
+    const runtime::Image first = decodeImage(framesDir / "frame-00000.png");
+    const runtime::Image full = decodeImage(reference);
+    ASSERT_EQ(first.width, full.width);
+    ASSERT_GT(coveredPixels(full), 100u);
+    // Nothing was resident but the root page, yet every pixel the complete frame covers is
+    // covered by something (the coarse cubes that stand in for what is still loading).
+    std::uint64_t holes = 0;
+    for (int y = 0; y < full.height; ++y)
+        for (int x = 0; x < full.width; ++x)
+            if (full.pixel(x, y)[3] > 0 && first.pixel(x, y)[3] == 0)
+                ++holes;
+    EXPECT_EQ(holes, 0u);
+}
+
+TEST(ReplayCommandTest, BudgetBelowTheRootPageIsRefused) {
+    const fs::path dir = freshTestDir();
+    const fs::path scene = buildForest(dir, "2MiB");
+    const fs::path path = makePath(dir, scene, "orbit", 2);
+    const ProcessResult run = runFarfield({"replay", scene.string(), path.string(), "--cache-mb", "1"}, dir);
+    EXPECT_EQ(run.exitCode, 1) << run.describe();
+    EXPECT_FALSE(run.signaled);
+    EXPECT_NE(run.err.find("root page"), std::string::npos) << run.err;
+}
+
+TEST(ReplayCommandTest, ACorruptPageFailsOnlyItsSubtree) {
+    const fs::path dir = freshTestDir();
+    const fs::path scene = buildForest(dir, "4KiB");
+    const fs::path path = makePath(dir, scene, "orbit", 6);
+    // Damage the page holding the tree prototype's root: every tree that is refined needs it.
+    const auto file = storage::SceneFile::open(scene);
+    ASSERT_TRUE(file.isOk()) << file.status().toString();
+    const std::uint64_t page = (*file)->prototypes().at(0).root.page;
+    std::vector<unsigned char> bytes = readBytes(scene);
+    bytes[page * 4096 + 100] ^= 0xFF;
+    const std::string named = "page " + std::to_string(page) + ":";
+    const fs::path broken = dir / "broken.ffs";
+    writeBytes(broken, bytes);
+    const fs::path summary = dir / "summary.json";
+    const ProcessResult run = runFarfield(
+            {"replay", broken.string(), path.string(), "--sync", "--cache-mb", "64", "--size", "160x120", "--summary",
+             summary.string()},
+            dir);
+    EXPECT_EQ(run.exitCode, 1) << run.describe(); // the damage is reported...
+    EXPECT_FALSE(run.signaled);
+    EXPECT_NE(run.err.find(named), std::string::npos) << run.err;
+    const json s = readJsonFile(summary);
+    ASSERT_TRUE(s.is_object()); // ...and every frame was still drawn
+    EXPECT_EQ(s["frames"], 6);
+    EXPECT_EQ(s["failed_pages"], 1);
+    // Reported once, not once per frame.
+    std::size_t mentions = 0;
+    for (std::size_t at = run.err.find(named); at != std::string::npos; at = run.err.find(named, at + 1))
+        ++mentions;
+    EXPECT_EQ(mentions, 1u) << run.err;
+}
+
+} // namespace
+} // namespace ff::viewer::test
