@@ -112,12 +112,47 @@ def build(data, out):
     fig.savefig(out / "build.png", dpi=110)
 
 
+def paging(data, out):
+    fig, ax = plt.subplots(figsize=(6.5, 4.5))
+    for family in sorted({r["family"] for r in data}):
+        sel = [r for r in data if r["family"] == family]
+        ax.plot([float(r["triangles"]) for r in sel], [float(r["complete_frame_bytes"]) / 2**20 for r in sel], "o-",
+                label=family)
+    ax.axhline(64, color="k", linestyle=":", label="target: 64 MB at 10^9 triangles")
+    ax.set_xscale("log")
+    ax.set_xlabel("triangles in the scene (log)")
+    ax.set_ylabel("resident for one complete frame (MiB)")
+    ax.set_title("working set against scene size")
+    ax.grid(True, which="both", alpha=0.3)
+    ax.legend(fontsize=8)
+    fig.tight_layout()
+    fig.savefig(out / "paging-working-set.png", dpi=110)
+
+    frames = rows(out / "paging-teleports.csv")
+    if frames:
+        fig, (ax1, ax2) = plt.subplots(2, 1, figsize=(9, 5.5), sharex=True)
+        x = [int(r["frame"]) for r in frames]
+        ax1.plot(x, [float(r["frame_ms"]) for r in frames], label="frame ms")
+        ax1.set_ylabel("frame time (ms)")
+        ax1b = ax1.twinx()
+        ax1b.plot(x, [float(r["nodes_deferred"]) for r in frames], color="C3", alpha=0.6, label="debt (nodes deferred)")
+        ax1b.set_ylabel("debt", color="C3")
+        ax2.plot(x, [float(r["resident_bytes"]) / 2**20 for r in frames], label="resident MiB")
+        ax2.plot(x, [float(r["bytes_read"]) / 2**20 for r in frames], label="MiB read this frame")
+        ax2.set_xlabel("frame")
+        ax2.set_ylabel("MiB")
+        ax2.legend(fontsize=8)
+        ax1.set_title("teleports with a cold cache")
+        fig.tight_layout()
+        fig.savefig(out / "paging-teleports.png", dpi=110)
+
+
 def main():
     kind, path, out = sys.argv[1], Path(sys.argv[2]), Path(sys.argv[3])
     data = rows(path)
     if not data:
         sys.exit(f"{path}: no rows")
-    {"table2": table2, "forest": forest, "build": build}[kind](data, out)
+    {"table2": table2, "forest": forest, "build": build, "paging": paging}[kind](data, out)
 
 
 if __name__ == "__main__":

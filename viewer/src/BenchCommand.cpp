@@ -24,9 +24,11 @@ CommandRunner addBenchCommand(CLI::App& app) {
     auto out = std::make_shared<std::string>("docs/results");
     auto work = std::make_shared<std::string>();
     CLI::App* cmd = app.add_subcommand("bench", "Benchmarks with CSV, PNG charts and a Markdown report");
-    cmd->add_option("benchmark", *which, "table2 (Chamberlain Table 2), forest (1..16384 trees), build (terrain ladder)")
+    cmd->add_option("benchmark", *which,
+                    "table2 (Chamberlain Table 2), forest (1..16384 trees), build (terrain ladder), paging "
+                    "(working set, teleports)")
             ->required()
-            ->check(CLI::IsMember({"table2", "forest", "build"}));
+            ->check(CLI::IsMember({"table2", "forest", "build", "paging"}));
     cmd->add_option("--out", *out, "Folder for CSV, charts and the report")->capture_default_str();
     cmd->add_option("--work-dir", *work, "Folder for the scene files (default: OUT/scenes, removed afterwards)");
     cmd->add_option("--frames", options->timedFrames, "Timed frames per measurement (median)")->capture_default_str();
@@ -40,6 +42,8 @@ CommandRunner addBenchCommand(CLI::App& app) {
             status = bench::runTable2(*options);
         else if (*which == "forest")
             status = bench::runForest(*options);
+        else if (*which == "paging")
+            status = bench::runPaging(*options);
         else
             status = bench::runBuild(*options);
         if (!status)

@@ -99,7 +99,8 @@ struct Renderer::Impl {
     GLuint arena = 0;
     GLsizeiptr slotBytes = 0;
     GLuint verticesPerSlot = 0;
-    std::uint32_t slotCount = 0;
+    std::uint32_t slotCount = 0; ///< slots the arena holds now
+    std::uint32_t maxSlots = 0;  ///< slots the GPU budget allows
     std::unordered_map<std::uint64_t, std::uint32_t> slotOfPage;
     std::vector<std::uint64_t> pageOfSlot;
     std::vector<std::uint32_t> slotBatch; ///< batch number that last used a slot
@@ -126,6 +127,7 @@ struct Renderer::Impl {
     Status drawFrame(const DrawList& list, const Camera& camera, int width, int height, int supersample,
                      const glm::vec4& clearColor, FrameStats& stats);
     Result<std::uint32_t> residentSlot(std::uint64_t page, FrameStats& stats);
+    void growArena();
     void drawBatch(const glm::mat4& viewProjection);
     Status drawGeometry(const DrawList& list, const glm::mat4& viewProjection, FrameStats& stats);
     void drawCubes(const DrawList& list, const glm::mat4& viewProjection, float pixelScale);
@@ -164,8 +166,11 @@ Result<std::unique_ptr<Renderer>> Renderer::create(
     const std::uint32_t trianglesPerPage = storage::trianglesPerPage(scene.pageSize());
     impl->slotBytes = static_cast<GLsizeiptr>(trianglesPerPage * sizeof(storage::PackedTriangle));
     impl->verticesPerSlot = trianglesPerPage * 3;
-    impl->slotCount = static_cast<std::uint32_t>(
+    // The arena starts small and doubles up to the budget: on llvmpipe GPU buffers are system
+    // memory, and a budget is a ceiling, not an amount to take up front.
+    impl->maxSlots = static_cast<std::uint32_t>(
             std::clamp<std::uint64_t>(options.gpuBudgetBytes / static_cast<std::uint64_t>(impl->slotBytes), 1, 1u << 20));
+    impl->slotCount = std::min<std::uint32_t>(impl->maxSlots, 64);
     impl->pageOfSlot.assign(impl->slotCount, 0);
     impl->slotBatch.assign(impl->slotCount, 0);
     for (std::uint32_t s = impl->slotCount; s-- > 0;)
@@ -252,9 +257,31 @@ Status Renderer::Impl::ensureTarget(int width, int height) {
     return Status::ok();
 }
 
+void Renderer::Impl::growArena() {
+    const std::uint32_t grown = std::min(maxSlots, slotCount * 2);
+    GLuint bigger = 0;
+    glGenBuffers(1, &bigger);
+    bufferData(bigger, slotBytes * grown, nullptr, GL_DYNAMIC_DRAW);
+    glBindBuffer(GL_COPY_READ_BUFFER, arena);
+    glBindBuffer(GL_COPY_WRITE_BUFFER, bigger);
+    glCopyBufferSubData(GL_COPY_READ_BUFFER, GL_COPY_WRITE_BUFFER, 0, 0, slotBytes * slotCount);
+    glDeleteBuffers(1, &arena);
+    arena = bigger;
+    glBindVertexArray(geometryVao);
+    glBindVertexBuffer(0, arena, 0, sizeof(storage::PackedVertex));
+    glBindVertexArray(0);
+    pageOfSlot.resize(grown, 0);
+    slotBatch.resize(grown, 0);
+    for (std::uint32_t s = grown; s-- > slotCount;)
+        freeSlots.push_back(s);
+    slotCount = grown;
+}
+
 Result<std::uint32_t> Renderer::Impl::residentSlot(std::uint64_t page, FrameStats& stats) {
     if (const auto it = slotOfPage.find(page); it != slotOfPage.end())
         return it->second;
+    if (freeSlots.empty() && slotCount < maxSlots)
+        growArena(); // slots already referenced by this batch keep their contents
     if (freeSlots.empty()) {
         // Evict the least recently used page not needed by the batch being assembled.
         const auto victim = lru.oldestWhereNot([this](std::uint64_t p) { return slotBatch[slotOfPage.at(p)] == batch; });

@@ -16,39 +16,6 @@
 
 namespace ff::viewer::bench {
 
-namespace {
-
-struct ChildRun {
-    double seconds = 0.0;
-    std::uint64_t peakRssBytes = 0;
-};
-
-Result<ChildRun> runChild(const std::vector<std::string>& argv) {
-    std::vector<char*> args;
-    for (const std::string& a : argv)
-        args.push_back(const_cast<char*>(a.c_str()));
-    args.push_back(nullptr);
-    const auto start = std::chrono::steady_clock::now();
-    const pid_t pid = fork();
-    if (pid < 0)
-        return Status(ErrorCode::IoError, "cannot start " + argv[0]);
-    if (pid == 0) {
-        execv(args[0], args.data());
-        _exit(127);
-    }
-    int status = 0;
-    rusage usage{};
-    wait4(pid, &status, 0, &usage);
-    ChildRun run;
-    run.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-    run.peakRssBytes = static_cast<std::uint64_t>(usage.ru_maxrss) * 1024;
-    if (!WIFEXITED(status) || WEXITSTATUS(status) != 0)
-        return Status(ErrorCode::Internal, "child build failed: " + argv[2] + " " + argv[3] + " " + argv[4]);
-    return run;
-}
-
-} // namespace
-
 Status runBuild(const BenchOptions& options) {
     std::filesystem::create_directories(options.outDir);
     const std::filesystem::path work = options.workDir.empty() ? options.outDir / "scenes" : options.workDir;

@@ -6,6 +6,9 @@
 #include <algorithm>
 #include <cstdio>
 #include <fstream>
+#include <chrono>
+#include <fcntl.h>
+#include <sys/resource.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -77,6 +80,38 @@ Result<runtime::Frame> timeFrames(
     frame->stats.selectMs = median(select);
     frame->stats.drawMs = median(draw);
     return frame;
+}
+
+Result<ChildRun> runChild(const std::vector<std::string>& argv) {
+    std::vector<char*> args;
+    for (const std::string& a : argv)
+        args.push_back(const_cast<char*>(a.c_str()));
+    args.push_back(nullptr);
+    const auto start = std::chrono::steady_clock::now();
+    const pid_t pid = fork();
+    if (pid < 0)
+        return Status(ErrorCode::IoError, "cannot start " + argv[0]);
+    if (pid == 0) {
+        // Children report through files; their stdout lines would interleave with ours.
+        const int devNull = open("/dev/null", O_WRONLY);
+        if (devNull >= 0)
+            dup2(devNull, STDOUT_FILENO);
+        execv(args[0], args.data());
+        _exit(127);
+    }
+    int status = 0;
+    rusage usage{};
+    wait4(pid, &status, 0, &usage);
+    ChildRun run;
+    run.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    run.peakRssBytes = static_cast<std::uint64_t>(usage.ru_maxrss) * 1024;
+    if (!WIFEXITED(status) || WEXITSTATUS(status) != 0) {
+        std::string command;
+        for (const std::string& a : argv)
+            command += (command.empty() ? "" : " ") + a;
+        return Status(ErrorCode::Internal, "failed: " + command);
+    }
+    return run;
 }
 
 Status buildGenerated(const std::string& spec, const std::filesystem::path& path) {

@@ -38,6 +38,15 @@ std::string formatNumber(double value, int decimals = 2);
         int warmup,
         int timed);
 
+/** A finished child process. */
+struct ChildRun {
+    double seconds = 0.0;
+    std::uint64_t peakRssBytes = 0; ///< ru_maxrss
+};
+
+/** Runs argv (argv[0] an executable path, no shell) to completion; non-zero exit is an error. */
+[[nodiscard]] Result<ChildRun> runChild(const std::vector<std::string>& argv);
+
 /** Builds a generator's scene (e.g. "forest:trees=16") into `path` with a 2 GiB budget. */
 [[nodiscard]] Status buildGenerated(const std::string& spec, const std::filesystem::path& path);
 

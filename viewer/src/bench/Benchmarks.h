@@ -19,6 +19,8 @@ struct BenchOptions {
 [[nodiscard]] Status runTable2(const BenchOptions& options);
 /** The recursively instanced forest, 1 to 16384 trees, at one fixed view (log-log chart). */
 [[nodiscard]] Status runForest(const BenchOptions& options);
+/** Working set of a complete frame against scene size; cold-cache teleports on a terrain. */
+[[nodiscard]] Status runPaging(const BenchOptions& options);
 /** Builder throughput and peak RSS on terrain ladders. */
 [[nodiscard]] Status runBuild(const BenchOptions& options);
 
