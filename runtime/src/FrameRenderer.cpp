@@ -8,7 +8,17 @@ FrameRenderer::FrameRenderer(
         const storage::SceneFile& scene, std::unique_ptr<IPageAccess> ownedPages, IPageAccess& pages)
     : mOwnedPages(std::move(ownedPages))
     , mPages(pages)
-    , mSelection(scene, pages) {}
+    , mSelection(scene, pages)
+    , mPrefetchSelection(scene, pages) {}
+
+void FrameRenderer::prefetch(SelectionOptions selection) {
+    if (!mPrefetchCamera)
+        return;
+    selection.priorityScale *= 0.25f;
+    FrameStats ignored;
+    // Its only effect is the page requests its lookups make; what it would draw is dropped.
+    (void)mPrefetchSelection.select(*mPrefetchCamera, selection, mPrefetchList, ignored);
+}
 
 Result<std::unique_ptr<FrameRenderer>> FrameRenderer::create(
         const storage::SceneFile& scene, const RendererOptions& options) {
@@ -39,6 +49,7 @@ Result<Frame> FrameRenderer::render(
     FF_RETURN_IF_ERROR(mSelection.select(camera, selection, mDrawList, frame.stats));
     frame.stats.selectMs = std::chrono::duration<double, std::milli>(Clock::now() - start).count();
     FF_ASSIGN_OR_RETURN(frame.image, mRenderer->render(mDrawList, camera, width, height, supersample, frame.stats));
+    prefetch(selection);
     mPages.endFrame();
     frame.stats.totalMs = frame.stats.selectMs + frame.stats.drawMs;
     return frame;
@@ -54,6 +65,7 @@ Result<FrameStats> FrameRenderer::present(const Camera& camera, SelectionOptions
     FF_RETURN_IF_ERROR(mSelection.select(camera, selection, mDrawList, stats));
     stats.selectMs = std::chrono::duration<double, std::milli>(Clock::now() - start).count();
     FF_RETURN_IF_ERROR(mRenderer->present(mDrawList, camera, width, height, stats));
+    prefetch(selection);
     mPages.endFrame();
     stats.totalMs = stats.selectMs + stats.drawMs;
     return stats;

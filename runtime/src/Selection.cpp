@@ -153,7 +153,7 @@ void Selection::visit(const storage::NodeRecord& node, std::uint32_t transform) 
         emitCube(node, transform);
         return;
     }
-    const float priority = std::min(projected, kTopPriority);
+    const float priority = std::min(projected, kTopPriority) * mOptions.priorityScale;
 
     if (!isCell(node)) {
         const storage::InstanceRecord& instance = mScene.instances()[node.geometryPage];

@@ -44,6 +44,7 @@ struct ReplayArgs {
     float epsilon = 1.0f;
     unsigned ioThreads = 2;
     std::size_t uploadsPerFrame = 64;
+    int prefetchFrames = 4;
     std::string csv;
     std::string json;
     std::string summary;
@@ -192,6 +193,11 @@ int runReplay(const ReplayArgs& args) {
         }
         lastEye = camera.eye;
 
+        if (args.prefetchFrames > 0 && !args.sync) {
+            runtime::Camera ahead = path->sample(path->frameTime(std::min<std::int64_t>(f + args.prefetchFrames, frames - 1)));
+            ahead.fitClipPlanes(bounds);
+            (*streaming)->setPrefetchCamera(ahead);
+        }
         const auto start = std::chrono::steady_clock::now();
         pageCache->pump(args.uploadsPerFrame);
         Result<runtime::Frame> frame = (*streaming)->render(camera, selection, size->x, size->y);
@@ -339,6 +345,9 @@ CommandRunner addReplayCommand(CLI::App& app) {
     cmd->add_option("--epsilon", args->epsilon, "Color-cube threshold in pixels")->capture_default_str();
     cmd->add_option("--io-threads", args->ioThreads, "Background read threads")->capture_default_str();
     cmd->add_option("--uploads-per-frame", args->uploadsPerFrame, "Finished reads installed per frame at most")
+            ->capture_default_str();
+    cmd->add_option("--prefetch-frames", args->prefetchFrames,
+                    "Also ask for the pages of the view this many frames ahead on the path (0: off)")
             ->capture_default_str();
     cmd->add_option("--csv", args->csv, "Per-frame telemetry as CSV");
     cmd->add_option("--json", args->json, "Per-frame telemetry as JSON");

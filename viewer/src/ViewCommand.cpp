@@ -201,6 +201,7 @@ int runView(const ViewArgs& args) {
     double smoothedMs = 0.0;
     bool failed = false;
     HudInfo hudInfo;
+    glm::vec3 previousEye = initialCamera->eye;
     for (int frame = 0; !(*window)->shouldClose() && (!scripted || frame < frames); ++frame) {
         const glm::ivec2 windowSize = (*window)->framebufferSize();
         const InputState& input =
@@ -258,8 +259,15 @@ int runView(const ViewArgs& args) {
         selection.method = controls.method;
         selection.epsilonPixels = controls.epsilonPixels;
         const runtime::Camera camera = navigation.camera();
-        if (streaming)
+        if (streaming) {
             streaming->cache->pump(args.uploadsPerFrame); // finished reads, under an upload budget
+            // Prefetch along the motion: where the camera will be in four frames at this speed.
+            runtime::Camera ahead = camera;
+            ahead.eye += 4.0f * (camera.eye - previousEye);
+            ahead.fitClipPlanes(bounds);
+            (*renderer)->setPrefetchCamera(ahead);
+        }
+        previousEye = camera.eye;
         auto stats = (*renderer)->present(camera, selection, windowSize.x, windowSize.y);
         if (!stats)
             return reportError("view", stats.status().withContext(args.scene));

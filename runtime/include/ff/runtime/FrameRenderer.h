@@ -10,6 +10,7 @@
 
 #include <cstdint>
 #include <memory>
+#include <optional>
 
 namespace ff::runtime {
 
@@ -44,6 +45,13 @@ public:
     [[nodiscard]] std::uint64_t gpuResidentBytes() const noexcept { return mRenderer->residentBytes(); }
 
     const DrawList& lastDrawList() const noexcept { return mDrawList; }
+
+    /**
+     * Prefetch along the camera's motion: after each following frame, selection also runs for
+     * `camera` (where the camera will be a few frames on) only to ask for its pages, at a quarter
+     * of the frame's priority. nullopt stops it. Useful with a streaming IPageAccess only.
+     */
+    void setPrefetchCamera(std::optional<Camera> camera) { mPrefetchCamera = camera; }
     /** Page failures first met by the last frame (each reported once). */
     const std::vector<Status>& newFailures() const noexcept { return mSelection.newFailures(); }
 
@@ -53,6 +61,10 @@ private:
     std::unique_ptr<IPageAccess> mOwnedPages;
     IPageAccess& mPages;
     Selection mSelection;
+    Selection mPrefetchSelection; ///< its own failures and scratch: the frame's stay intact
+    std::optional<Camera> mPrefetchCamera;
+    DrawList mPrefetchList;
+    void prefetch(SelectionOptions selection);
     std::unique_ptr<Renderer> mRenderer;
     DrawList mDrawList;
 };

@@ -33,6 +33,9 @@ struct SelectionOptions {
      *  0 draws geometry everywhere. */
     float epsilonPixels = 1.0f;
     CubeStyle cubeStyle = CubeStyle::Auto;
+    /** Multiplies the priority of the pages this selection asks for (prefetch asks below the
+     *  frame being drawn). */
+    float priorityScale = 1.0f;
     float viewportWidth = 640.0f;
     float viewportHeight = 480.0f;
 };
