@@ -270,7 +270,8 @@ Result<PrototypeBuildResult> PrototypeBuilder::buildChunked(
                 for (std::uint32_t c = 0; c < node.childCount; ++c)
                     if (top[node.firstChild + c].octant == octant)
                         next = node.firstChild + c;
-                FF_ASSERT(next != 0); // every counted cell has a path
+                if (next == 0) // every counted cell has a path; if not, fail rather than loop
+                    return Status(ErrorCode::Internal, "partitioning lost the path of a counted cell");
                 index = next;
             }
         }

@@ -13,7 +13,7 @@ void CachedPageAccess::beginFrame() { mCache.beginFrame(); }
 void CachedPageAccess::endFrame() { mCache.endFrame(); }
 
 PageLookup CachedPageAccess::lookup(std::uint64_t page, storage::PageType type, float priority) {
-    if (const auto it = mFailures.find(page); it != mFailures.end())
+    if (const auto it = mFailures.find(failureKey(page, type)); it != mFailures.end())
         return {PageAvailability::Failed, {}, &it->second};
     if (const auto bytes = mCache.tryGet(page)) {
         // The cache verified the checksum and the page's own index; the type is ours to check.
@@ -21,7 +21,7 @@ PageLookup CachedPageAccess::lookup(std::uint64_t page, storage::PageType type, 
         std::memcpy(&trailer, bytes->data() + storage::pagePayloadBytes(mPageSize), sizeof(trailer));
         if (trailer.pageType != static_cast<std::uint16_t>(type)) {
             const auto [it, inserted] = mFailures.emplace(
-                    page, Status(ErrorCode::Corrupt, "page " + std::to_string(page) + ": page type " +
+                    failureKey(page, type), Status(ErrorCode::Corrupt, "page " + std::to_string(page) + ": page type " +
                                                              std::to_string(trailer.pageType) + ", expected " +
                                                              std::to_string(static_cast<int>(type))));
             return {PageAvailability::Failed, {}, &it->second};
@@ -29,7 +29,7 @@ PageLookup CachedPageAccess::lookup(std::uint64_t page, storage::PageType type, 
         return {PageAvailability::Ready, bytes->first(storage::pagePayloadBytes(mPageSize)), nullptr};
     }
     if (mCache.state(page) == cache::PageState::Failed) {
-        const auto [it, inserted] = mFailures.emplace(page, mCache.failure(page).value_or(
+        const auto [it, inserted] = mFailures.emplace(failureKey(page, type), mCache.failure(page).value_or(
                 Status(ErrorCode::IoError, "page " + std::to_string(page) + ": unreadable")));
         return {PageAvailability::Failed, {}, &it->second};
     }

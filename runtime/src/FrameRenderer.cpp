@@ -4,6 +4,23 @@
 
 namespace ff::runtime {
 
+namespace {
+
+// Ends the page access's frame on every path out, so a failed frame still cancels the requests
+// it no longer wants.
+class FrameBracket {
+public:
+    explicit FrameBracket(IPageAccess& pages) : mPages(pages) { mPages.beginFrame(); }
+    ~FrameBracket() { mPages.endFrame(); }
+    FrameBracket(const FrameBracket&) = delete;
+    FrameBracket& operator=(const FrameBracket&) = delete;
+
+private:
+    IPageAccess& mPages;
+};
+
+} // namespace
+
 FrameRenderer::FrameRenderer(
         const storage::SceneFile& scene, std::unique_ptr<IPageAccess> ownedPages, IPageAccess& pages)
     : mOwnedPages(std::move(ownedPages))
@@ -45,12 +62,11 @@ Result<Frame> FrameRenderer::render(
     selection.viewportWidth = static_cast<float>(width);
     selection.viewportHeight = static_cast<float>(height);
     const auto start = Clock::now();
-    mPages.beginFrame();
+    const FrameBracket bracket(mPages);
     FF_RETURN_IF_ERROR(mSelection.select(camera, selection, mDrawList, frame.stats));
     frame.stats.selectMs = std::chrono::duration<double, std::milli>(Clock::now() - start).count();
     FF_ASSIGN_OR_RETURN(frame.image, mRenderer->render(mDrawList, camera, width, height, supersample, frame.stats));
     prefetch(selection);
-    mPages.endFrame();
     frame.stats.totalMs = frame.stats.selectMs + frame.stats.drawMs;
     return frame;
 }
@@ -61,12 +77,11 @@ Result<FrameStats> FrameRenderer::present(const Camera& camera, SelectionOptions
     selection.viewportWidth = static_cast<float>(width);
     selection.viewportHeight = static_cast<float>(height);
     const auto start = Clock::now();
-    mPages.beginFrame();
+    const FrameBracket bracket(mPages);
     FF_RETURN_IF_ERROR(mSelection.select(camera, selection, mDrawList, stats));
     stats.selectMs = std::chrono::duration<double, std::milli>(Clock::now() - start).count();
     FF_RETURN_IF_ERROR(mRenderer->present(mDrawList, camera, width, height, stats));
     prefetch(selection);
-    mPages.endFrame();
     stats.totalMs = stats.selectMs + stats.drawMs;
     return stats;
 }

@@ -28,6 +28,10 @@ bool isCell(const storage::NodeRecord& node) {
 // Priorities for pages nobody can see the size of yet (the root, a full draw).
 constexpr float kTopPriority = 1e30f;
 
+// Deeper than any builder writes (octree levels <= 20 per prototype, instance level <= 24 plus
+// groups): a file nesting further has a reference cycle, which must not overflow the stack.
+constexpr int kMaxNesting = 128;
+
 } // namespace
 
 Selection::Selection(const storage::SceneFile& scene, IPageAccess& pages)
@@ -114,7 +118,7 @@ Status Selection::select(const Camera& camera, const SelectionOptions& options, 
     } else {
         storage::NodeRecord root{};
         if (readNode(mScene.header().root, kTopPriority, root) == Fetch::Ready)
-            visit(root, 0);
+            visit(root, 0, 0);
         else if (!mNewFailures.empty())
             return mNewFailures.front().withContext("the root node is unreadable");
     }
@@ -130,7 +134,12 @@ void Selection::defer(const storage::NodeRecord& node, std::uint32_t transform) 
         emitCube(node, transform);
 }
 
-void Selection::visit(const storage::NodeRecord& node, std::uint32_t transform) {
+void Selection::visit(const storage::NodeRecord& node, std::uint32_t transform, int depth) {
+    if (depth > kMaxNesting) {
+        reportFailure(Status(ErrorCode::Corrupt, "node nesting deeper than " + std::to_string(kMaxNesting) +
+                                                         " levels: the hierarchy has a reference cycle"));
+        return;
+    }
     ++mStats->nodesVisited;
     if (!mFrusta[transform].intersects(toVec3(node.boundsMin), toVec3(node.boundsMax))) {
         ++mStats->nodesCulled;
@@ -163,7 +172,7 @@ void Selection::visit(const storage::NodeRecord& node, std::uint32_t transform) 
             return;
         }
         ++mStats->instancesEntered;
-        visit(root, pushTransform(mOut->transforms[transform] * instanceTransform(instance)));
+        visit(root, pushTransform(mOut->transforms[transform] * instanceTransform(instance)), depth + 1);
         return;
     }
 
@@ -199,7 +208,7 @@ void Selection::visit(const storage::NodeRecord& node, std::uint32_t transform) 
               [](const ChildEntry& a, const ChildEntry& b) { return a.distance > b.distance; });
     for (std::size_t i = base; i < base + node.childCount; ++i) {
         const storage::NodeRecord child = mChildStack[i].record; // the stack may grow below
-        visit(child, transform);
+        visit(child, transform, depth + 1);
     }
     mChildStack.resize(base);
 }
@@ -261,7 +270,14 @@ void Selection::collectPrototypeGeometry(std::uint32_t prototype) {
     if (readNode(mScene.prototypes()[prototype].root, kTopPriority, root) != Fetch::Ready)
         return;
     stack.push_back(root);
+    // A prototype has at most the file's nodeCount nodes; more means a reference cycle.
+    std::uint64_t budget = mScene.header().nodeCount + 1;
     while (!stack.empty()) {
+        if (budget-- == 0) {
+            reportFailure(Status(ErrorCode::Corrupt, "prototype " + std::to_string(prototype) +
+                                                             ": its hierarchy has a reference cycle"));
+            break;
+        }
         const storage::NodeRecord node = stack.back();
         stack.pop_back();
         if (collectGeometry(node, kTopPriority) != Fetch::Ready)

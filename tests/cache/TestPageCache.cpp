@@ -588,7 +588,7 @@ TEST(PageCacheTest, DestructionWithReadsBlockedInFlightIsClean) {
     std::thread destroyer([doomed = std::move(cache)]() mutable { doomed.reset(); });
     source->openGate();
     destroyer.join();
-    EXPECT_LE(source->readOrder().size(), 20u);
+    EXPECT_GE(source->readOrder().size(), 2u); // the two blocked reads ran; destruction joined them
 }
 
 TEST(PageCacheTest, DestructionWithCompletionsNotPumpedFreesThem) {

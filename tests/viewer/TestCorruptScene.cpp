@@ -3,9 +3,15 @@
 
 #include "FarfieldProcess.h"
 
+#include <ff/storage/SceneFile.h>
+#include <ff/storage/SceneFormat.h>
+
+#include <xxhash.h>
+
 #include <gtest/gtest.h>
 
 #include <cstdint>
+#include <cstring>
 #include <filesystem>
 #include <optional>
 #include <regex>
@@ -129,6 +135,52 @@ TEST(CorruptSceneTest, TruncationAtEveryPageBoundaryIsRefused) {
     longer.resize(original.size() + kPageSize, 0);
     writeBytes(truncated, longer);
     expectRefused(truncated, dir, pageCount);
+}
+
+} // namespace
+} // namespace ff::viewer::test
+
+namespace ff::viewer::test {
+namespace {
+
+// A node that is its own child passes every per-record check (its children lie inside one
+// page) and carries a valid checksum once resealed: only the traversal can notice the cycle.
+TEST(CorruptSceneTest, AReferenceCycleIsReportedNotFollowedForever) {
+    const fs::path dir = freshTestDir();
+    const fs::path scene = dir / "scene.ffs";
+    const ProcessResult built = runFarfield(
+            {"build", "-q", "--generate", "forest:trees=4", "--page-size", "4KiB", "-o", scene.string()}, dir);
+    ASSERT_EQ(built.exitCode, 0) << built.describe();
+    storage::NodeRef root{};
+    {
+        const auto file = storage::SceneFile::open(scene);
+        ASSERT_TRUE(file.isOk()) << file.status().toString();
+        root = (*file)->prototypes().at(0).root;
+    }
+    std::vector<unsigned char> bytes = readBytes(scene);
+    const std::size_t page = std::size_t{root.page} * kPageSize;
+    storage::NodeRecord record{};
+    std::memcpy(&record, bytes.data() + page + std::size_t{root.slot} * sizeof(record), sizeof(record));
+    ASSERT_GT(record.childCount, 0);
+    record.firstChild = root;
+    record.childCount = 1;
+    std::memcpy(bytes.data() + page + std::size_t{root.slot} * sizeof(record), &record, sizeof(record));
+    const std::uint64_t checksum = XXH3_64bits(bytes.data() + page, kPageSize - 8);
+    std::memcpy(bytes.data() + page + kPageSize - 8, &checksum, sizeof(checksum));
+    const fs::path cyclic = dir / "cyclic.ffs";
+    writeBytes(cyclic, bytes);
+
+    const ProcessResult checked = runFarfield({"check", cyclic.string()}, dir);
+    EXPECT_EQ(checked.exitCode, 0) << checked.describe(); // every page is intact
+    for (const char* method : {"hierarchical", "full"}) {
+        const ProcessResult rendered = runFarfield(
+                {"render", cyclic.string(), "--method", method, "--distance", "0.6", "--size", "64x48", "-o",
+                 (dir / "out.png").string()},
+                dir);
+        EXPECT_FALSE(rendered.signaled) << rendered.describe();
+        EXPECT_EQ(rendered.exitCode, 1) << rendered.describe();
+        EXPECT_NE(rendered.err.find("reference cycle"), std::string::npos) << rendered.err;
+    }
 }
 
 } // namespace

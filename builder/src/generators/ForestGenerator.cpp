@@ -1,6 +1,6 @@
 // forest: the recursively instanced tree scenes of Chamberlain et al. '96 (§5.2, Plate 5,
 // Figure 5): one ~52k-triangle tree (their Plate 1 tree has 52,470) planted N = 4^k times in a
-// recursive 2x2 layout, up to 16,384 trees (859 M triangles drawn). The tree is stored once; each
+// recursive 2x2 layout, up to 16,384 trees (861.6 M triangles drawn). The tree is stored once; each
 // tree is an instance (one transform), so N trees cost one tree plus N transforms.
 //
 // The tree is a fixed branching skeleton (trunk -> limbs -> branches -> shoots -> twigs) of

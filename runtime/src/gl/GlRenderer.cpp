@@ -44,7 +44,12 @@ Result<GLuint> compileShader(GLenum type, const char* source) {
 
 Result<GLuint> linkProgram(const char* vertexSource, const char* fragmentSource) {
     FF_ASSIGN_OR_RETURN(const GLuint vs, compileShader(GL_VERTEX_SHADER, vertexSource));
-    FF_ASSIGN_OR_RETURN(const GLuint fs, compileShader(GL_FRAGMENT_SHADER, fragmentSource));
+    Result<GLuint> compiledFs = compileShader(GL_FRAGMENT_SHADER, fragmentSource);
+    if (!compiledFs) {
+        glDeleteShader(vs);
+        return compiledFs.status();
+    }
+    const GLuint fs = *compiledFs;
     const GLuint program = glCreateProgram();
     glAttachShader(program, vs);
     glAttachShader(program, fs);

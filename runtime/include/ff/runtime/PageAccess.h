@@ -22,6 +22,12 @@ struct PageLookup {
     const Status* failure = nullptr;    ///< Failed: the reason, owned by the IPageAccess
 };
 
+/** Failures are remembered per (page, expected type): a corrupt reference that expects the
+ *  wrong type of a good page must not make that page unusable for correct references. */
+inline std::uint64_t failureKey(std::uint64_t page, storage::PageType type) {
+    return (page << 3) | static_cast<std::uint64_t>(type);
+}
+
 /**
  * How a frame reaches scene-file pages. Selection never waits: a page that is not Ready makes it
  * draw something coarser that is, and the lookup itself asks for the page with the given

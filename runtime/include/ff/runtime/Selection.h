@@ -73,7 +73,7 @@ private:
 
     enum class Fetch { Ready, Missing };
 
-    void visit(const storage::NodeRecord& node, std::uint32_t transform);
+    void visit(const storage::NodeRecord& node, std::uint32_t transform, int depth);
     /** Looks a page up; Failed pages are reported once and read as Missing. */
     Fetch fetch(std::uint64_t page, storage::PageType type, float priority, std::span<const std::byte>& payload);
     Fetch readNode(storage::NodeRef ref, float priority, storage::NodeRecord& out);
