@@ -12,8 +12,10 @@ bool isUsableNormal(const glm::vec3& n) {
     return std::isfinite(len2) && len2 > 1e-12f;
 }
 
-storage::PackedVertex packVertex(const SourceVertex& v, const glm::vec3& faceNormal) {
-    const glm::vec3 n = isUsableNormal(v.normal) ? v.normal : faceNormal;
+} // namespace
+
+storage::PackedVertex packVertex(const SourceVertex& v, const glm::vec3& fallbackNormal) noexcept {
+    const glm::vec3 n = isUsableNormal(v.normal) ? v.normal : fallbackNormal;
     storage::PackedVertex out{};
     out.position = {v.position.x, v.position.y, v.position.z};
     out.normalOct = storage::encodeOctNormal(n.x, n.y, n.z);
@@ -24,8 +26,6 @@ storage::PackedVertex packVertex(const SourceVertex& v, const glm::vec3& faceNor
             storage::toUnorm8(v.color.a)};
     return out;
 }
-
-} // namespace
 
 storage::PackedTriangle packTriangle(
         const SourceVertex& a, const SourceVertex& b, const SourceVertex& c) noexcept {

@@ -53,36 +53,40 @@ Result<std::unique_ptr<FrameRenderer>> FrameRenderer::create(
     return frameRenderer;
 }
 
-Result<Frame> FrameRenderer::render(
-        const Camera& camera, SelectionOptions selection, int width, int height, int supersample) {
-    using Clock = std::chrono::steady_clock;
-    Frame frame;
+// Both ways of drawing a frame: selection (timed), the drawing `draw` does, then prefetch for
+// the camera ahead, all inside one page-access frame.
+template <typename Draw>
+Status FrameRenderer::frame(const Camera& camera, SelectionOptions selection, int width, int height, FrameStats& stats,
+                            Draw&& draw) {
     // The ε rule counts pixels of the output image: supersampling refines the samples, not
     // the choice of representation.
     selection.viewportWidth = static_cast<float>(width);
     selection.viewportHeight = static_cast<float>(height);
-    const auto start = Clock::now();
+    const auto start = std::chrono::steady_clock::now();
     const FrameBracket bracket(mPages);
-    FF_RETURN_IF_ERROR(mSelection.select(camera, selection, mDrawList, frame.stats));
-    frame.stats.selectMs = std::chrono::duration<double, std::milli>(Clock::now() - start).count();
-    FF_ASSIGN_OR_RETURN(frame.image, mRenderer->render(mDrawList, camera, width, height, supersample, frame.stats));
+    FF_RETURN_IF_ERROR(mSelection.select(camera, selection, mDrawList, stats));
+    stats.selectMs = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+    FF_RETURN_IF_ERROR(draw());
     prefetch(selection);
-    frame.stats.totalMs = frame.stats.selectMs + frame.stats.drawMs;
-    return frame;
+    stats.totalMs = stats.selectMs + stats.drawMs;
+    return Status::ok();
+}
+
+Result<Frame> FrameRenderer::render(
+        const Camera& camera, SelectionOptions selection, int width, int height, int supersample) {
+    Frame result;
+    FF_RETURN_IF_ERROR(frame(camera, selection, width, height, result.stats, [&]() -> Status {
+        FF_ASSIGN_OR_RETURN(result.image, mRenderer->render(mDrawList, camera, width, height, supersample, result.stats));
+        return Status::ok();
+    }));
+    return result;
 }
 
 Result<FrameStats> FrameRenderer::present(const Camera& camera, SelectionOptions selection, int width, int height) {
-    using Clock = std::chrono::steady_clock;
     FrameStats stats;
-    selection.viewportWidth = static_cast<float>(width);
-    selection.viewportHeight = static_cast<float>(height);
-    const auto start = Clock::now();
-    const FrameBracket bracket(mPages);
-    FF_RETURN_IF_ERROR(mSelection.select(camera, selection, mDrawList, stats));
-    stats.selectMs = std::chrono::duration<double, std::milli>(Clock::now() - start).count();
-    FF_RETURN_IF_ERROR(mRenderer->present(mDrawList, camera, width, height, stats));
-    prefetch(selection);
-    stats.totalMs = stats.selectMs + stats.drawMs;
+    FF_RETURN_IF_ERROR(frame(camera, selection, width, height, stats, [&] {
+        return mRenderer->present(mDrawList, camera, width, height, stats);
+    }));
     return stats;
 }
 

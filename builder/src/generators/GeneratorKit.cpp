@@ -178,20 +178,6 @@ Status TriangleBatcher::flush() {
     return Status::ok();
 }
 
-storage::PackedVertex packVertex(const SourceVertex& v) noexcept {
-    // Mirrors packVertex in SceneSink.cpp for the usable-normal case; the terrain asserts that
-    // the two agree in Debug builds.
-    storage::PackedVertex out{};
-    out.position = {v.position.x, v.position.y, v.position.z};
-    out.normalOct = storage::encodeOctNormal(v.normal.x, v.normal.y, v.normal.z);
-    out.color = {
-            storage::linearToSrgb8(v.color.r),
-            storage::linearToSrgb8(v.color.g),
-            storage::linearToSrgb8(v.color.b),
-            storage::toUnorm8(v.color.a)};
-    return out;
-}
-
 glm::mat4 makeTransform(const glm::vec3& translation, double yawTurns, float scale) noexcept {
     const SinCos r = sinCosTurns(yawTurns);
     const float c = static_cast<float>(r.cos) * scale;

@@ -173,12 +173,6 @@ private:
     std::uint64_t mSent = 0;
 };
 
-/**
- * Packs one vertex exactly as packTriangle does when the vertex has a usable normal. Lets the
- * terrain pack each grid vertex once instead of once per corner (6x fewer sRGB conversions).
- * Precondition: `v.normal` is finite and non-zero.
- */
-storage::PackedVertex packVertex(const SourceVertex& v) noexcept;
 
 /** Column-major affine transform: translate(t) * rotateY(turns) * scale(s). */
 glm::mat4 makeTransform(const glm::vec3& translation, double yawTurns, float scale) noexcept;

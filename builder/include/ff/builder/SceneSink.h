@@ -26,6 +26,9 @@ struct SourceVertex {
     glm::vec4 color{1.0f};
 };
 
+/** Packs one vertex; a zero or non-finite normal is replaced by `fallbackNormal`. */
+storage::PackedVertex packVertex(const SourceVertex& v, const glm::vec3& fallbackNormal) noexcept;
+
 /** Packs three vertices into the on-disk/GPU triangle layout (positions unchanged). */
 storage::PackedTriangle packTriangle(
         const SourceVertex& a, const SourceVertex& b, const SourceVertex& c) noexcept;

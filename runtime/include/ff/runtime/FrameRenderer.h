@@ -65,6 +65,8 @@ private:
     std::optional<Camera> mPrefetchCamera;
     DrawList mPrefetchList;
     void prefetch(SelectionOptions selection);
+    template <typename Draw>
+    Status frame(const Camera& camera, SelectionOptions selection, int width, int height, FrameStats& stats, Draw&& draw);
     std::unique_ptr<Renderer> mRenderer;
     DrawList mDrawList;
 };
