@@ -9,6 +9,7 @@
 #include <glm/gtc/type_ptr.hpp>
 
 #include <chrono>
+#include <initializer_list>
 #include <cstddef>
 #include <string>
 #include <unordered_map>
@@ -25,9 +26,10 @@ struct IndirectCommand {
     GLuint baseInstance;
 };
 
-Result<GLuint> compileShader(GLenum type, const char* source) {
+// `sources` are concatenated, as glShaderSource does with several strings.
+Result<GLuint> compileShader(GLenum type, std::initializer_list<const char*> sources) {
     const GLuint shader = glCreateShader(type);
-    glShaderSource(shader, 1, &source, nullptr);
+    glShaderSource(shader, static_cast<GLsizei>(sources.size()), sources.begin(), nullptr);
     glCompileShader(shader);
     GLint ok = 0;
     glGetShaderiv(shader, GL_COMPILE_STATUS, &ok);
@@ -42,9 +44,9 @@ Result<GLuint> compileShader(GLenum type, const char* source) {
     return shader;
 }
 
-Result<GLuint> linkProgram(const char* vertexSource, const char* fragmentSource) {
-    FF_ASSIGN_OR_RETURN(const GLuint vs, compileShader(GL_VERTEX_SHADER, vertexSource));
-    Result<GLuint> compiledFs = compileShader(GL_FRAGMENT_SHADER, fragmentSource);
+Result<GLuint> linkProgram(std::initializer_list<const char*> vertexSources, const char* fragmentSource) {
+    FF_ASSIGN_OR_RETURN(const GLuint vs, compileShader(GL_VERTEX_SHADER, vertexSources));
+    Result<GLuint> compiledFs = compileShader(GL_FRAGMENT_SHADER, {fragmentSource});
     if (!compiledFs) {
         glDeleteShader(vs);
         return compiledFs.status();
@@ -163,9 +165,9 @@ Result<std::unique_ptr<Renderer>> Renderer::create(
     impl->scene = &scene;
     impl->pages = &pages;
     impl->options = options;
-    FF_ASSIGN_OR_RETURN(impl->geometryProgram, linkProgram(gl::kGeometryVertexShader, gl::kGeometryFragmentShader));
-    FF_ASSIGN_OR_RETURN(impl->cubeProgram, linkProgram(gl::kCubeVertexShader, gl::kCubeFragmentShader));
-    FF_ASSIGN_OR_RETURN(impl->cubePointProgram, linkProgram(gl::kCubePointVertexShader, gl::kCubeFragmentShader));
+    FF_ASSIGN_OR_RETURN(impl->geometryProgram, linkProgram({gl::kGeometryVertexShader}, gl::kGeometryFragmentShader));
+    FF_ASSIGN_OR_RETURN(impl->cubeProgram, linkProgram({gl::kCubeShaderInputs, gl::kCubeVertexShader}, gl::kCubeFragmentShader));
+    FF_ASSIGN_OR_RETURN(impl->cubePointProgram, linkProgram({gl::kCubeShaderInputs, gl::kCubePointVertexShader}, gl::kCubeFragmentShader));
 
     // Slots hold a page's triangles without its trailer, so vertex offsets stay whole vertices.
     const std::uint32_t trianglesPerPage = storage::trianglesPerPage(scene.pageSize());

@@ -4,6 +4,16 @@
 
 namespace ff::runtime::gl {
 
+const char* const kCubeShaderInputs = R"(#version 450 core
+layout(location = 0) in vec3 aBoxMin;
+layout(location = 1) in vec3 aBoxMax;
+layout(location = 2) in uint aTransform;
+layout(location = 3) in vec4 aFaces[6];    // premultiplied linear RGBA8, -X +X -Y +Y -Z +Z
+layout(std430, binding = 0) readonly buffer Transforms { mat4 transforms[]; };
+layout(std430, binding = 2) readonly buffer LocalEyes { vec4 localEyes[]; };
+uniform mat4 uViewProjection;
+)";
+
 const char* const kGeometryVertexShader = R"(#version 450 core
 layout(location = 0) in vec3 aPosition;
 layout(location = 1) in vec2 aNormalOct;   // snorm16, octahedral
@@ -43,15 +53,7 @@ layout(location = 0) out vec4 fragColor;
 void main() { fragColor = vec4(vColor, 1.0); }
 )";
 
-const char* const kCubeVertexShader = R"(#version 450 core
-layout(location = 0) in vec3 aBoxMin;
-layout(location = 1) in vec3 aBoxMax;
-layout(location = 2) in uint aTransform;
-layout(location = 3) in vec4 aFaces[6];    // premultiplied linear RGBA8, -X +X -Y +Y -Z +Z
-layout(std430, binding = 0) readonly buffer Transforms { mat4 transforms[]; };
-layout(std430, binding = 2) readonly buffer LocalEyes { vec4 localEyes[]; };
-uniform mat4 uViewProjection;
-out vec4 vColor;
+const char* const kCubeVertexShader = R"(out vec4 vColor;
 
 const ivec2 kCorners[6] = ivec2[6](ivec2(0, 0), ivec2(1, 0), ivec2(1, 1), ivec2(0, 0), ivec2(1, 1), ivec2(0, 1));
 
@@ -78,15 +80,7 @@ void main() {
 }
 )";
 
-const char* const kCubePointVertexShader = R"(#version 450 core
-layout(location = 0) in vec3 aBoxMin;
-layout(location = 1) in vec3 aBoxMax;
-layout(location = 2) in uint aTransform;
-layout(location = 3) in vec4 aFaces[6];    // premultiplied linear RGBA8, -X +X -Y +Y -Z +Z
-layout(std430, binding = 0) readonly buffer Transforms { mat4 transforms[]; };
-layout(std430, binding = 2) readonly buffer LocalEyes { vec4 localEyes[]; };
-uniform mat4 uViewProjection;
-uniform float uPixelScale; // pixels per world unit at view depth 1 (orthographic: per unit)
+const char* const kCubePointVertexShader = R"(uniform float uPixelScale; // pixels per world unit at view depth 1 (orthographic: per unit)
 out vec4 vColor;
 
 // A cube smaller than a pixel or two, drawn as one point: the faces the viewer sees, weighted by

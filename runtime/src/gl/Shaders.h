@@ -5,6 +5,9 @@ namespace ff::runtime::gl {
 /** Geometry: PackedVertex attributes, per-draw transform index via baseInstance. */
 extern const char* const kGeometryVertexShader;
 extern const char* const kGeometryFragmentShader;
+/** Declarations both cube vertex shaders start with (#version, the per-cube attributes and
+ *  buffers): compiled as the first source string before either body below. */
+extern const char* const kCubeShaderInputs;
 /** Color cubes: one instance per cube, 18 vertices (a face per axis), hidden faces collapsed. */
 extern const char* const kCubeVertexShader;
 extern const char* const kCubeFragmentShader;

@@ -44,7 +44,6 @@ public:
     /** Bytes of geometry pages resident in GPU memory (Renderer::residentBytes). */
     [[nodiscard]] std::uint64_t gpuResidentBytes() const noexcept { return mRenderer->residentBytes(); }
 
-    const DrawList& lastDrawList() const noexcept { return mDrawList; }
 
     /**
      * Prefetch along the camera's motion: after each following frame, selection also runs for
