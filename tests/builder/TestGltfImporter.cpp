@@ -170,10 +170,14 @@ std::string testName(const fs::path& relative) {
     return name;
 }
 
+// Runs during static initialisation (it names the parameterized tests), so it must not throw:
+// without ../shared/data the list is empty and SharedDataTest says what is missing.
 std::vector<std::string> validModels() {
     std::vector<std::string> out;
     for (const char* folder : {"static", "draco", "animated", "edgecases", "scanned"}) {
-        for (const auto& entry : fs::recursive_directory_iterator(kData / folder)) {
+        std::error_code error;
+        for (fs::recursive_directory_iterator it(kData / folder, error), end; !error && it != end; it.increment(error)) {
+            const fs::directory_entry& entry = *it;
             const std::string ext = entry.path().extension().string();
             if (entry.is_regular_file() && (ext == ".gltf" || ext == ".glb"))
                 out.push_back(fs::relative(entry.path(), kData).string());
@@ -181,6 +185,12 @@ std::vector<std::string> validModels() {
     }
     std::sort(out.begin(), out.end());
     return out;
+}
+
+TEST(SharedDataTest, TheModelsBesideTheCheckoutAreThere) {
+    ASSERT_TRUE(fs::is_directory(kData)) << kData << " is missing: the tests read the models of ../shared/data "
+                                                    "beside the checkout";
+    EXPECT_FALSE(validModels().empty());
 }
 
 struct Imported {
