@@ -1,8 +1,13 @@
 #!/usr/bin/python3
-"""Charts for `farfield bench`: reads the benchmark's CSV, writes PNG charts beside it.
+"""Charts for `farfield bench`: reads a scenario's CSV, writes PNG charts named after it.
 
-usage: plot_bench.py {table2|forest|build} CSV OUTDIR
+usage: plot_bench.py {table2|forest|build|paging|views|path} CSV OUTDIR
+
+CSV is OUT/NAME.csv (paging: OUT/NAME-working-set.csv, with OUT/NAME-teleports.csv beside it);
+the charts are OUTDIR/NAME.png (views with a sweep also NAME-sweep.png; paging
+NAME-working-set.png and NAME-teleports.png).
 """
+import math
 import csv
 import sys
 from pathlib import Path
@@ -27,7 +32,19 @@ def pareto(points):
     return best
 
 
-def table2(data, out):
+def number(text):
+    """A CSV cell as a float; empty cells are NaN, 'inf' stays infinite."""
+    return float(text) if text not in ("", None) else math.nan
+
+
+def capped(values, margin=3.0):
+    """Infinite PSNR (identical images) drawn just above the largest finite value."""
+    finite = [v for v in values if math.isfinite(v)]
+    top = (max(finite) if finite else 60.0) + margin
+    return [top if v == math.inf else v for v in values]
+
+
+def table2(data, out, name):
     fig, (ax1, ax2) = plt.subplots(1, 2, figsize=(11, 4.2))
     for size in sorted({(r["width"], r["height"]) for r in data}, key=lambda s: int(s[0])):
         sel = [r for r in data if (r["width"], r["height"]) == size]
@@ -59,10 +76,10 @@ def table2(data, out):
     ax2.set_title("speedup by distance")
     ax2.legend(fontsize=7)
     fig.tight_layout()
-    fig.savefig(out / "table2.png", dpi=110)
+    fig.savefig(out / f"{name}.png", dpi=110)
 
 
-def forest(data, out):
+def forest(data, out, name):
     fig, ax = plt.subplots(figsize=(7, 4.8))
     for i, size in enumerate(sorted({(r["width"], r["height"]) for r in data}, key=lambda s: int(s[0]))):
         sel = [r for r in data if (r["width"], r["height"]) == size]
@@ -87,10 +104,10 @@ def forest(data, out):
     ax.grid(True, which="both", alpha=0.3)
     ax.legend(fontsize=7)
     fig.tight_layout()
-    fig.savefig(out / "forest.png", dpi=110)
+    fig.savefig(out / f"{name}.png", dpi=110)
 
 
-def build(data, out):
+def build(data, out, name):
     fig, (ax1, ax2) = plt.subplots(1, 2, figsize=(11, 4.2))
     for budget in sorted({r["budget"] for r in data}, key=lambda b: int([r for r in data if r["budget"] == b][0]["budget_bytes"])):
         sel = sorted([r for r in data if r["budget"] == budget], key=lambda r: int(r["triangles"]))
@@ -109,10 +126,10 @@ def build(data, out):
     ax1.set_title("builder throughput")
     ax2.set_title("peak resident memory")
     fig.tight_layout()
-    fig.savefig(out / "build.png", dpi=110)
+    fig.savefig(out / f"{name}.png", dpi=110)
 
 
-def paging(data, out):
+def paging(data, out, name):
     fig, ax = plt.subplots(figsize=(6.5, 4.5))
     for family in sorted({r["family"] for r in data}):
         sel = [r for r in data if r["family"] == family]
@@ -126,9 +143,10 @@ def paging(data, out):
     ax.grid(True, which="both", alpha=0.3)
     ax.legend(fontsize=8)
     fig.tight_layout()
-    fig.savefig(out / "paging-working-set.png", dpi=110)
+    fig.savefig(out / f"{name}.png", dpi=110)
 
-    frames = rows(out / "paging-teleports.csv")
+    prefix = name.removesuffix("-working-set")
+    frames = rows(out / f"{prefix}-teleports.csv")
     if frames:
         fig, (ax1, ax2) = plt.subplots(2, 1, figsize=(9, 5.5), sharex=True)
         x = [int(r["frame"]) for r in frames]
@@ -144,15 +162,131 @@ def paging(data, out):
         ax2.legend(fontsize=8)
         ax1.set_title("teleports with a cold cache")
         fig.tight_layout()
-        fig.savefig(out / "paging-teleports.png", dpi=110)
+        fig.savefig(out / f"{prefix}-teleports.png", dpi=110)
+
+
+def panels(count, width=5.0, height=4.2):
+    fig, axes = plt.subplots(1, count, figsize=(width * count, height), squeeze=False)
+    return fig, axes[0]
+
+
+def setting(r):
+    """A method and its sweep value: 'faces' or 'faces eps=2'."""
+    if r["sweep_parameter"] and r["sweep_value"]:
+        return f"{r['method']} {r['sweep_parameter']}={r['sweep_value']}"
+    return r["method"]
+
+
+def views(data, out, name):
+    """Error against frame time per view (Pareto front marked); with a sweep, error and
+    coverage error against the swept value."""
+    view_names = list(dict.fromkeys(r["view"] for r in data))
+    methods = list(dict.fromkeys(r["method"] for r in data))
+    color = {m: f"C{i % 10}" for i, m in enumerate(methods)}
+    fig, axes = panels(len(view_names))
+    for ax, view in zip(axes, view_names):
+        sel = [r for r in data if r["view"] == view]
+        psnr = capped([number(r["psnr_srgb"]) for r in sel])
+        ms = [number(r["frame_ms"]) for r in sel]
+        for m in methods:
+            idx = [i for i, r in enumerate(sel) if r["method"] == m]
+            ax.plot([ms[i] for i in idx], [psnr[i] for i in idx], "o-" if len(idx) > 1 else "o",
+                    color=color[m], label=m)
+            for i in idx:
+                if sel[i]["sweep_value"]:
+                    ax.annotate(sel[i]["sweep_value"], (ms[i], psnr[i]), fontsize=7, xytext=(3, 3),
+                                textcoords="offset points")
+        front = pareto(list(zip(ms, psnr)))
+        ax.plot([p[0] for p in front], [p[1] for p in front], color="0.6", linewidth=5, alpha=0.35, zorder=0,
+                label="Pareto front")
+        ax.set_xscale("log")
+        ax.set_xlabel("frame time (ms, log)")
+        ax.set_ylabel("PSNR against the reference (dB, higher is better)")
+        ax.set_title(f"view {view}")
+        ax.grid(True, which="both", alpha=0.3)
+        ax.legend(fontsize=7)
+    fig.tight_layout()
+    fig.savefig(out / f"{name}.png", dpi=110)
+
+    swept = [r for r in data if r["sweep_parameter"]]
+    if not swept:
+        return
+    parameter = swept[0]["sweep_parameter"]
+    values = list(dict.fromkeys(r["sweep_value"] for r in swept))
+    numeric = all(_is_number(v) for v in values)
+    x_of = (lambda v: float(v)) if numeric else (lambda v: values.index(v))
+    fig, axes = plt.subplots(2, len(view_names), figsize=(5.0 * len(view_names), 7.5), squeeze=False, sharex="col")
+    for col, view in enumerate(view_names):
+        top, bottom = axes[0][col], axes[1][col]
+        for m in methods:
+            sel = [r for r in swept if r["view"] == view and r["method"] == m]
+            if sel:
+                xs = [x_of(r["sweep_value"]) for r in sel]
+                top.plot(xs, capped([number(r["psnr_srgb"]) for r in sel]), "o-", color=color[m], label=m)
+                bottom.plot(xs, [100 * number(r["holes_fraction"]) for r in sel], "o-", color=color[m],
+                            label=f"{m} holes")
+                bottom.plot(xs, [100 * number(r["over_coverage_fraction"]) for r in sel], "s--", color=color[m],
+                            alpha=0.6, label=f"{m} over-coverage")
+            else:  # not swept (full): a horizontal line for comparison
+                fixed = [r for r in data if r["view"] == view and r["method"] == m]
+                if fixed:
+                    top.axhline(capped([number(fixed[0]["psnr_srgb"])])[0], color=color[m], linestyle=":",
+                                label=f"{m} (not swept)")
+        top.set_title(f"view {view}")
+        top.set_ylabel("PSNR (dB, higher is better)")
+        bottom.set_ylabel("% of reference-covered pixels")
+        bottom.set_xlabel(parameter)
+        if not numeric:
+            bottom.set_xticks(range(len(values)), values)
+        for ax in (top, bottom):
+            ax.grid(True, alpha=0.3)
+            ax.legend(fontsize=7)
+    fig.tight_layout()
+    fig.savefig(out / f"{name}-sweep.png", dpi=110)
+
+
+def _is_number(text):
+    try:
+        float(text)
+        return True
+    except ValueError:
+        return False
+
+
+def path(data, out, name):
+    """Per-frame timelines per method: temporal instability, PSNR, frame time."""
+    methods = list(dict.fromkeys(r["method"] for r in data))
+    fig, (ax1, ax2, ax3) = plt.subplots(3, 1, figsize=(10, 8), sharex=True)
+    for i, m in enumerate(methods):
+        sel = [r for r in data if r["method"] == m]
+        x = [int(r["frame"]) for r in sel]
+        ax1.plot(x, [number(r["instability"]) for r in sel], color=f"C{i % 10}", label=m)
+        ax2.plot(x, capped([number(r["psnr_srgb"]) for r in sel]), color=f"C{i % 10}", label=m)
+        ax3.plot(x, [number(r["frame_ms"]) for r in sel], color=f"C{i % 10}", label=m)
+    ax1.set_ylabel("instability (linear luminance)")
+    ax1.set_title("temporal instability: change beyond the reference's own (lower is better)")
+    ax2.set_ylabel("PSNR (dB)")
+    ax2.set_title("error against the per-frame full reference (higher is better)")
+    ax3.set_ylabel("frame time (ms)")
+    ax3.set_xlabel("frame")
+    for ax in (ax1, ax2, ax3):
+        ax.grid(True, alpha=0.3)
+        ax.legend(fontsize=7)
+    fig.tight_layout()
+    fig.savefig(out / f"{name}.png", dpi=110)
+
+
+KINDS = {"table2": table2, "forest": forest, "build": build, "paging": paging, "views": views, "path": path}
 
 
 def main():
-    kind, path, out = sys.argv[1], Path(sys.argv[2]), Path(sys.argv[3])
-    data = rows(path)
+    if len(sys.argv) != 4 or sys.argv[1] not in KINDS:
+        sys.exit(__doc__)
+    kind, csv_path, out = sys.argv[1], Path(sys.argv[2]), Path(sys.argv[3])
+    data = rows(csv_path)
     if not data:
-        sys.exit(f"{path}: no rows")
-    {"table2": table2, "forest": forest, "build": build, "paging": paging}[kind](data, out)
+        sys.exit(f"{csv_path}: no rows")
+    KINDS[kind](data, out, csv_path.stem)
 
 
 if __name__ == "__main__":

@@ -3,6 +3,7 @@
 
 #include "BenchSupport.h"
 #include "Benchmarks.h"
+#include "Units.h"
 
 #include <nlohmann/json.hpp>
 
@@ -16,29 +17,31 @@
 
 namespace ff::viewer::bench {
 
-Status runBuild(const BenchOptions& options) {
-    std::filesystem::create_directories(options.outDir);
-    const std::filesystem::path work = options.workDir.empty() ? options.outDir / "scenes" : options.workDir;
-    std::filesystem::create_directories(work);
-    const unsigned cores = std::max(1u, std::thread::hardware_concurrency());
+namespace {
 
-    struct Step {
-        std::uint64_t triangles;
-        std::string budget;
-    };
-    std::vector<Step> ladder;
-    if (options.quick)
-        ladder = {{1'000'000, "256MiB"}, {4'000'000, "256MiB"}};
-    else
-        ladder = {{1'000'000, "1GiB"}, {4'000'000, "1GiB"}, {16'000'000, "1GiB"}, {64'000'000, "1GiB"},
-                  {200'000'000, "1GiB"}, {16'000'000, "64MiB"}, {64'000'000, "256MiB"}};
+struct Step {
+    std::int64_t triangles;
+    std::string budget; ///< `farfield build --memory-budget`
+};
+
+struct BuildParams {
+    std::vector<Step> ladder = {{1'000'000, "1GiB"},  {4'000'000, "1GiB"},   {16'000'000, "1GiB"},
+                                {64'000'000, "1GiB"}, {200'000'000, "1GiB"}, {16'000'000, "64MiB"},
+                                {64'000'000, "256MiB"}};
+};
+
+Status runBuild(const BuildParams& p, const Scenario& scenario, const BenchOptions& options) {
+    std::filesystem::create_directories(options.outDir);
+    const std::filesystem::path work = workFolder(options);
+    const unsigned cores = std::max(1u, std::thread::hardware_concurrency());
+    const std::vector<Step>& ladder = p.ladder;
 
     CsvTable table({"triangles", "budget", "budget_bytes", "seconds", "triangles_per_second",
                     "triangles_per_second_per_core", "peak_rss_bytes", "rss_minus_budget_bytes", "file_bytes", "chunks",
                     "spill_bytes"});
     for (const Step& step : ladder) {
-        std::fprintf(stderr, "build: terrain of %llu triangles, budget %s\n",
-                     static_cast<unsigned long long>(step.triangles), step.budget.c_str());
+        std::fprintf(stderr, "%s: terrain of %lld triangles, budget %s\n", scenario.name.c_str(),
+                     static_cast<long long>(step.triangles), step.budget.c_str());
         const std::filesystem::path scene = work / "terrain.ffs";
         const std::filesystem::path report = work / "terrain.json";
         FF_ASSIGN_OR_RETURN(const ChildRun run,
@@ -60,17 +63,41 @@ Status runBuild(const BenchOptions& options) {
         std::filesystem::remove(scene);
         std::filesystem::remove(report);
     }
-    const std::filesystem::path csv = options.outDir / "build.csv";
+    const std::filesystem::path csv = options.outDir / (scenario.name + ".csv");
     FF_RETURN_IF_ERROR(table.write(csv));
     FF_RETURN_IF_ERROR(plotCharts("build", csv, options.outDir));
-    std::ofstream md(options.outDir / "build.md");
-    md << "# Builder throughput and memory\n\n"
-       << "`farfield bench build`: `farfield build --generate terrain:triangles=N` end to end (generate, spill, "
+    std::ofstream md(options.outDir / (scenario.name + ".md"));
+    md << "# " << scenario.title << "\n\n";
+    if (!scenario.description.empty())
+        md << scenario.description << "\n\n";
+    md << "`" << options.command << "`: `farfield build --generate terrain:triangles=N` end to end (generate, spill, "
        << "partition, octree, cubes, write, fsync) on " << cores << " cores; peak RSS is the child's ru_maxrss.\n\n"
-       << table.markdown() << "\n![throughput and memory](build.png)\n";
-    if (options.workDir.empty())
-        std::filesystem::remove_all(work);
+       << table.markdown() << "\n![throughput and memory](" << scenario.name << ".png)\n";
+    removeWorkFolder(options);
     return Status::ok();
+}
+
+} // namespace
+
+Result<BenchRun> prepareBuild(const Scenario& scenario) {
+    BuildParams p;
+    ScenarioReader reader = readScenario(scenario);
+    if (reader.has("ladder")) {
+        p.ladder.clear();
+        for (ScenarioReader& step : reader.objects("ladder")) {
+            const std::int64_t triangles = step.integer("triangles", 0);
+            const std::string budget = step.string("budget", "1GiB");
+            if (triangles < 1)
+                step.fail("triangles", "must be a whole number >= 1");
+            if (!parseByteSize(budget))
+                step.fail("budget", "\"" + budget + "\" is not a byte size like 256MiB or 1GiB");
+            p.ladder.push_back({triangles, budget});
+        }
+        if (p.ladder.empty())
+            reader.fail("ladder", "needs at least one step");
+    }
+    FF_RETURN_IF_ERROR(reader.finish());
+    return BenchRun([p, scenario](const BenchOptions& options) { return runBuild(p, scenario, options); });
 }
 
 } // namespace ff::viewer::bench

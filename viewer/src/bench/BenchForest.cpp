@@ -7,23 +7,30 @@
 #include <ff/runtime/OffscreenContext.h>
 
 #include <array>
+#include <cmath>
 #include <cstdio>
 #include <fstream>
+#include <string>
+#include <vector>
 
 namespace ff::viewer::bench {
 
 namespace {
 
-// Above this many triangles the full (brute-force) frame is not rendered but extrapolated from
-// the per-triangle cost measured at the largest rendered size (llvmpipe: ~2.5 M triangles/s).
-constexpr std::uint64_t kFullMeasuredLimit = 60'000'000;
+struct ForestParams {
+    std::vector<std::int64_t> trees = {1, 4, 16, 64, 256, 1024, 4096, 16384};
+    /** The paper's image size (Table 2) and a common window size. */
+    std::vector<std::array<int, 2>> sizes = {{124, 124}, {640, 480}};
+    float eps = 1.0f;
+    /** Above this many triangles the full (brute-force) frame is not rendered but extrapolated
+     *  from the per-triangle cost measured at the largest rendered size (llvmpipe: ~2.5 M
+     *  triangles/s). */
+    std::int64_t fullMeasuredLimit = 60'000'000;
+};
 
-} // namespace
-
-Status runForest(const BenchOptions& options) {
+Status runForest(const ForestParams& p, const Scenario& scenario, const BenchOptions& options) {
     std::filesystem::create_directories(options.outDir);
-    const std::filesystem::path work = options.workDir.empty() ? options.outDir / "scenes" : options.workDir;
-    std::filesystem::create_directories(work);
+    const std::filesystem::path work = workFolder(options);
     FF_ASSIGN_OR_RETURN(auto context, runtime::OffscreenContext::create());
 
     // One viewpoint for every forest, relative to the corner where the forest starts: outside
@@ -38,15 +45,13 @@ Status runForest(const BenchOptions& options) {
         c.zFar = 20000.0f;
         return c;
     };
-    // The paper's image size (Table 2) and a common window size.
-    const std::array<std::array<int, 2>, 2> sizes = {{{124, 124}, {640, 480}}};
 
     CsvTable table({"width", "height", "trees", "triangles", "full_ms", "full_measured", "hierarchical_ms", "speedup", "triangles_drawn",
                     "cubes_drawn", "nodes_visited", "file_bytes"});
-    std::array<double, 2> fullMsPerTriangle{};
-    const std::uint64_t maxTrees = options.quick ? 256 : 16384;
-    for (std::uint64_t trees = 1; trees <= maxTrees; trees *= 4) {
-        std::fprintf(stderr, "forest: %llu trees\n", static_cast<unsigned long long>(trees));
+    std::vector<double> fullMsPerTriangle(p.sizes.size(), 0.0);
+    const auto fullMeasuredLimit = static_cast<std::uint64_t>(p.fullMeasuredLimit);
+    for (const std::int64_t trees : p.trees) {
+        std::fprintf(stderr, "%s: %lld trees\n", scenario.name.c_str(), static_cast<long long>(trees));
         const std::filesystem::path scene = work / ("forest-" + std::to_string(trees) + ".ffs");
         FF_RETURN_IF_ERROR(buildGenerated("forest:trees=" + std::to_string(trees), scene));
         FF_ASSIGN_OR_RETURN(auto file, storage::SceneFile::open(scene));
@@ -54,14 +59,15 @@ Status runForest(const BenchOptions& options) {
         const std::uint64_t triangles = file->header().instancedTriangles;
         const runtime::Camera camera = cornerCamera(*file);
 
-        for (std::size_t si = 0; si < sizes.size(); ++si) {
-            const int width = sizes[si][0];
-            const int height = sizes[si][1];
+        for (std::size_t si = 0; si < p.sizes.size(); ++si) {
+            const int width = p.sizes[si][0];
+            const int height = p.sizes[si][1];
             runtime::SelectionOptions hierarchical;
+            hierarchical.epsilonPixels = p.eps;
             FF_ASSIGN_OR_RETURN(const runtime::Frame hier,
                                 timeFrames(*renderer, camera, hierarchical, width, height, 1, options.timedFrames));
             double fullMs = 0.0;
-            const bool measured = triangles <= kFullMeasuredLimit;
+            const bool measured = triangles <= fullMeasuredLimit;
             if (measured) {
                 runtime::SelectionOptions full;
                 full.method = runtime::Method::Full;
@@ -81,20 +87,55 @@ Status runForest(const BenchOptions& options) {
         file.reset();
         std::filesystem::remove(scene);
     }
-    const std::filesystem::path csv = options.outDir / "forest.csv";
+    const std::filesystem::path csv = options.outDir / (scenario.name + ".csv");
     FF_RETURN_IF_ERROR(table.write(csv));
     FF_RETURN_IF_ERROR(plotCharts("forest", csv, options.outDir));
-    std::ofstream md(options.outDir / "forest.md");
-    md << "# The recursively instanced forest\n\n"
-       << "`farfield bench forest`: forests of 1 to " << maxTrees << " trees (one ~52.6k-triangle prototype plus one "
-       << "transform per tree), one viewpoint fixed at the forest's corner looking diagonally into it and over it to the horizon, at 124x124 (the paper's image size) and 640x480, epsilon = 1. "
-       << "Full (brute force) frames are measured up to " << kFullMeasuredLimit / 1'000'000
+    std::string sizes;
+    for (const auto& size : p.sizes)
+        sizes += (sizes.empty() ? "" : " and ") + std::to_string(size[0]) + "x" + std::to_string(size[1]);
+    std::ofstream md(options.outDir / (scenario.name + ".md"));
+    md << "# " << scenario.title << "\n\n";
+    if (!scenario.description.empty())
+        md << scenario.description << "\n\n";
+    md << "`" << options.command << "`: forests of " << p.trees.front() << " to " << p.trees.back()
+       << " trees (one ~52.6k-triangle prototype plus one "
+       << "transform per tree), one viewpoint fixed at the forest's corner looking diagonally into it and over it to the horizon, at "
+       << sizes << " (124x124 is the paper's image size), epsilon = " << p.eps << ". "
+       << "Full (brute force) frames are measured up to " << p.fullMeasuredLimit / 1'000'000
        << " M triangles and extrapolated above that from the measured per-triangle cost (full_measured = 0). "
        << "Chamberlain et al. report an 88x speedup at 16,384 trees (859 M polygons).\n\n"
-       << table.markdown() << "\n![frame time against scene size](forest.png)\n";
-    if (options.workDir.empty())
-        std::filesystem::remove_all(work);
+       << table.markdown() << "\n![frame time against scene size](" << scenario.name << ".png)\n";
+    removeWorkFolder(options);
     return Status::ok();
+}
+
+} // namespace
+
+Result<BenchRun> prepareForest(const Scenario& scenario) {
+    ForestParams p;
+    ScenarioReader reader = readScenario(scenario);
+    p.sizes = reader.sizes("sizes", p.sizes);
+    p.eps = static_cast<float>(reader.number("eps", p.eps));
+    p.fullMeasuredLimit = reader.integer("full_measured_limit", p.fullMeasuredLimit);
+    if (reader.has("trees")) {
+        p.trees.clear();
+        for (const double trees : reader.numbers("trees", {})) {
+            if (std::floor(trees) != trees)
+                reader.fail("trees", "must be whole numbers");
+            p.trees.push_back(static_cast<std::int64_t>(trees));
+        }
+    }
+    for (std::size_t i = 0; i < p.trees.size(); ++i)
+        if (p.trees[i] < 1 || (i > 0 && p.trees[i] <= p.trees[i - 1]))
+            reader.fail("trees", "must be whole numbers >= 1 in increasing order");
+    if (p.trees.empty())
+        reader.fail("trees", "needs at least one forest size");
+    if (!(p.eps >= 0.0f))
+        reader.fail("eps", "must be >= 0 pixels");
+    if (p.fullMeasuredLimit < 0)
+        reader.fail("full_measured_limit", "must be >= 0 triangles");
+    FF_RETURN_IF_ERROR(reader.finish());
+    return BenchRun([p, scenario](const BenchOptions& options) { return runForest(p, scenario, options); });
 }
 
 } // namespace ff::viewer::bench

@@ -8,6 +8,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include <cmath>
 #include <cstdio>
 #include <fstream>
 
@@ -20,12 +21,23 @@ nlohmann::json readJson(const std::filesystem::path& path) {
     return nlohmann::json::parse(in, nullptr, false);
 }
 
-} // namespace
+struct PagingParams {
+    // Working set: forests and terrains of these sizes, one complete (--sync) frame each.
+    std::vector<std::int64_t> forestTrees = {1, 4, 16, 64, 256, 1024, 4096, 16384};
+    std::vector<std::int64_t> terrainTriangles = {1'000'000, 4'000'000, 16'000'000, 64'000'000};
+    std::int64_t workingSetCacheMb = 4096;
+    // Teleports: a cold cache, asynchronous.
+    std::int64_t teleportTriangles = 16'000'000;
+    std::int64_t teleportFrames = 400;
+    std::int64_t teleports = 20;
+    std::int64_t teleportSeed = 3;
+    std::int64_t teleportCacheMb = 64;
+};
 
-Status runPaging(const BenchOptions& options) {
+Status runPaging(const PagingParams& p, const Scenario& scenario, const BenchOptions& options) {
     std::filesystem::create_directories(options.outDir);
-    const std::filesystem::path work = options.workDir.empty() ? options.outDir / "scenes" : options.workDir;
-    std::filesystem::create_directories(work);
+    const std::filesystem::path work = workFolder(options);
+    const std::string prefix = scenario.name;
     const std::string& ff = options.selfExe;
     const std::filesystem::path scene = work / "paging.ffs";
     const std::filesystem::path path = work / "path.json";
@@ -37,19 +49,19 @@ Status runPaging(const BenchOptions& options) {
         std::string spec;
     };
     std::vector<Step> ladder;
-    for (int trees = 1; trees <= (options.quick ? 64 : 16384); trees *= 4)
+    for (const std::int64_t trees : p.forestTrees)
         ladder.push_back({"forest", "forest:trees=" + std::to_string(trees)});
-    for (long long triangles : options.quick ? std::vector<long long>{1'000'000} : std::vector<long long>{1'000'000, 4'000'000, 16'000'000, 64'000'000})
+    for (const std::int64_t triangles : p.terrainTriangles)
         ladder.push_back({"terrain", "terrain:triangles=" + std::to_string(triangles)});
     CsvTable workingSet({"family", "spec", "triangles", "file_bytes", "complete_frame_bytes", "frame_ms"});
     for (const Step& step : ladder) {
-        std::fprintf(stderr, "paging: working set of %s\n", step.spec.c_str());
+        std::fprintf(stderr, "%s: working set of %s\n", prefix.c_str(), step.spec.c_str());
         FF_RETURN_IF_ERROR(runChild({ff, "build", "-q", "--generate", step.spec, "-o", scene.string(), "--report",
                                      (work / "report.json").string()})
                                    .status());
         // One view, the same in scene radii for every size: the orbit's first frame.
         FF_RETURN_IF_ERROR(runChild({ff, "path", "orbit", scene.string(), "-o", path.string(), "--frames", "1"}).status());
-        FF_RETURN_IF_ERROR(runChild({ff, "replay", scene.string(), path.string(), "--sync", "--cache-mb", "4096",
+        FF_RETURN_IF_ERROR(runChild({ff, "replay", scene.string(), path.string(), "--sync", "--cache-mb", std::to_string(p.workingSetCacheMb),
                                      "--summary", summary.string()})
                                    .status());
         const nlohmann::json report = readJson(work / "report.json");
@@ -61,35 +73,78 @@ Status runPaging(const BenchOptions& options) {
                            std::to_string(s.value("peak_resident_bytes", std::uint64_t{0})),
                            formatNumber(s.value("p50_ms", 0.0))});
     }
-    FF_RETURN_IF_ERROR(workingSet.write(options.outDir / "paging-working-set.csv"));
+    const std::filesystem::path workingSetCsv = options.outDir / (prefix + "-working-set.csv");
+    FF_RETURN_IF_ERROR(workingSet.write(workingSetCsv));
 
     // ---- teleports across a terrain, cold cache ---------------------------------------------
-    const std::string terrain = options.quick ? "terrain:triangles=1000000" : "terrain:triangles=16000000";
-    const std::string teleports = options.quick ? "5" : "20";
-    std::fprintf(stderr, "paging: %s teleports across %s\n", teleports.c_str(), terrain.c_str());
+    const std::string terrain = "terrain:triangles=" + std::to_string(p.teleportTriangles);
+    const std::string teleports = std::to_string(p.teleports);
+    std::fprintf(stderr, "%s: %s teleports across %s\n", prefix.c_str(), teleports.c_str(), terrain.c_str());
     FF_RETURN_IF_ERROR(runChild({ff, "build", "-q", "--generate", terrain, "-o", scene.string()}).status());
     FF_RETURN_IF_ERROR(runChild({ff, "path", "teleports", scene.string(), "-o", path.string(), "--frames",
-                                 options.quick ? "100" : "400", "--teleports", teleports, "--seed", "3"})
+                                 std::to_string(p.teleportFrames), "--teleports", teleports, "--seed",
+                                 std::to_string(p.teleportSeed)})
                                .status());
-    const std::filesystem::path frames = options.outDir / "paging-teleports.csv";
-    FF_RETURN_IF_ERROR(runChild({ff, "replay", scene.string(), path.string(), "--cache-mb", "64", "--csv",
-                                 frames.string(), "--summary", (options.outDir / "paging-teleports-summary.json").string()})
+    const std::filesystem::path frames = options.outDir / (prefix + "-teleports.csv");
+    const std::filesystem::path teleportSummary = options.outDir / (prefix + "-teleports-summary.json");
+    FF_RETURN_IF_ERROR(runChild({ff, "replay", scene.string(), path.string(), "--cache-mb",
+                                 std::to_string(p.teleportCacheMb), "--csv", frames.string(), "--summary",
+                                 teleportSummary.string()})
                                .status());
-    FF_RETURN_IF_ERROR(plotCharts("paging", options.outDir / "paging-working-set.csv", options.outDir));
+    FF_RETURN_IF_ERROR(plotCharts("paging", workingSetCsv, options.outDir));
 
-    const nlohmann::json t = readJson(options.outDir / "paging-teleports-summary.json");
-    std::ofstream md(options.outDir / "paging.md");
-    md << "# Paging behaviour\n\n"
-       << "`farfield bench paging`. **Working set**: the bytes resident for one complete frame (`replay --sync`, "
+    const nlohmann::json t = readJson(teleportSummary);
+    std::ofstream md(options.outDir / (prefix + ".md"));
+    md << "# " << scenario.title << "\n\n";
+    if (!scenario.description.empty())
+        md << scenario.description << "\n\n";
+    md << "`" << options.command << "`. **Working set**: the bytes resident for one complete frame (`replay --sync`, "
        << "epsilon = 1, 640x480, the first frame of `farfield path orbit`: the same view in scene radii for every "
        << "size) against scene size.\n\n"
-       << workingSet.markdown() << "\n![working set against scene size](paging-working-set.png)\n\n"
-       << "**Teleports**: " << teleports << " jumps across `" << terrain << "` with a cold 64 MiB cache, "
-       << "asynchronous (`paging-teleports.csv` per frame, summary below).\n\n```json\n"
-       << t.dump(2) << "\n```\n\n![teleport timeline](paging-teleports.png)\n";
-    if (options.workDir.empty())
-        std::filesystem::remove_all(work);
+       << workingSet.markdown() << "\n![working set against scene size](" << prefix << "-working-set.png)\n\n"
+       << "**Teleports**: " << teleports << " jumps across `" << terrain << "` with a cold " << p.teleportCacheMb
+       << " MiB cache, asynchronous (`" << prefix << "-teleports.csv` per frame, summary below).\n\n```json\n"
+       << t.dump(2) << "\n```\n\n![teleport timeline](" << prefix << "-teleports.png)\n";
+    removeWorkFolder(options);
     return Status::ok();
+}
+
+/** A non-empty, increasing list of whole numbers >= 1. */
+std::vector<std::int64_t> readLadder(ScenarioReader& reader, const char* key, std::vector<std::int64_t> fallback) {
+    if (!reader.has(key))
+        return fallback;
+    std::vector<std::int64_t> ladder;
+    for (const double value : reader.numbers(key, {})) {
+        if (!(value >= 1.0) || std::floor(value) != value || (!ladder.empty() && value <= static_cast<double>(ladder.back())))
+            reader.fail(key, "must be whole numbers >= 1 in increasing order");
+        ladder.push_back(static_cast<std::int64_t>(value));
+    }
+    return ladder;
+}
+
+} // namespace
+
+Result<BenchRun> preparePaging(const Scenario& scenario) {
+    PagingParams p;
+    ScenarioReader reader = readScenario(scenario);
+    ScenarioReader ws = reader.object("working_set");
+    p.forestTrees = readLadder(ws, "forest_trees", p.forestTrees);
+    p.terrainTriangles = readLadder(ws, "terrain_triangles", p.terrainTriangles);
+    p.workingSetCacheMb = ws.integer("cache_mb", p.workingSetCacheMb);
+    ScenarioReader tp = reader.object("teleports");
+    p.teleportTriangles = tp.integer("terrain_triangles", p.teleportTriangles);
+    p.teleportFrames = tp.integer("frames", p.teleportFrames);
+    p.teleports = tp.integer("jumps", p.teleports);
+    p.teleportSeed = tp.integer("seed", p.teleportSeed);
+    p.teleportCacheMb = tp.integer("cache_mb", p.teleportCacheMb);
+    if (p.workingSetCacheMb < 1)
+        ws.fail("cache_mb", "must be >= 1");
+    if (p.teleportTriangles < 1 || p.teleportCacheMb < 1 || p.teleportSeed < 0)
+        tp.fail("", "terrain_triangles and cache_mb must be >= 1, seed >= 0");
+    if (p.teleports < 1 || p.teleportFrames < 2 * p.teleports)
+        tp.fail("", "needs jumps >= 1 and frames >= 2 * jumps");
+    FF_RETURN_IF_ERROR(reader.finish());
+    return BenchRun([p, scenario](const BenchOptions& options) { return runPaging(p, scenario, options); });
 }
 
 } // namespace ff::viewer::bench

@@ -1,5 +1,7 @@
 #include "BenchSupport.h"
 
+#include "Benchmarks.h"
+
 #include <ff/builder/Generators.h>
 #include <ff/builder/SceneBuilder.h>
 
@@ -13,6 +15,17 @@
 #include <unistd.h>
 
 namespace ff::viewer::bench {
+
+std::filesystem::path workFolder(const BenchOptions& options) {
+    const std::filesystem::path work = options.workDir.empty() ? options.outDir / "scenes" : options.workDir;
+    std::filesystem::create_directories(work);
+    return work;
+}
+
+void removeWorkFolder(const BenchOptions& options) {
+    if (options.workDir.empty())
+        std::filesystem::remove_all(options.outDir / "scenes");
+}
 
 Status CsvTable::write(const std::filesystem::path& path) const {
     std::ofstream out(path);
@@ -109,7 +122,10 @@ Result<ChildRun> runChild(const std::vector<std::string>& argv) {
         std::string command;
         for (const std::string& a : argv)
             command += (command.empty() ? "" : " ") + a;
-        return Status(ErrorCode::Internal, "failed: " + command);
+        const std::string how = WIFEXITED(status) ? "exit status " + std::to_string(WEXITSTATUS(status))
+                                : WIFSIGNALED(status) ? "killed by signal " + std::to_string(WTERMSIG(status))
+                                                      : "did not finish";
+        return Status(ErrorCode::Internal, "failed (" + how + "): " + command);
     }
     return run;
 }

@@ -4,6 +4,7 @@
 
 #include "BenchSupport.h"
 #include "Benchmarks.h"
+#include "ScenarioParts.h"
 
 #include <ff/runtime/ImageMetrics.h>
 #include <ff/runtime/OffscreenContext.h>
@@ -11,16 +12,30 @@
 #include <array>
 #include <cstdio>
 #include <fstream>
+#include <string>
+#include <vector>
 
 namespace ff::viewer::bench {
 
-Status runTable2(const BenchOptions& options) {
+namespace {
+
+struct Table2Params {
+    std::string generate = "forest:trees=1";
+    std::vector<std::array<int, 2>> sizes = {{124, 124}, {640, 480}};
+    std::vector<double> distances = {1.75, 3.5, 7.0, 14.0};
+    float azimuth = 30.0f;
+    float elevation = 0.0f;
+    float fov = 45.0f;
+    float eps = 1.0f;
+    int supersample = 4;
+};
+
+Status runTable2(const Table2Params& p, const Scenario& scenario, const BenchOptions& options) {
     std::filesystem::create_directories(options.outDir);
-    const std::filesystem::path work = options.workDir.empty() ? options.outDir / "scenes" : options.workDir;
-    std::filesystem::create_directories(work);
+    const std::filesystem::path work = workFolder(options);
     const std::filesystem::path scene = work / "tree.ffs";
-    std::fprintf(stderr, "table2: building the tree\n");
-    FF_RETURN_IF_ERROR(buildGenerated("forest:trees=1", scene));
+    std::fprintf(stderr, "%s: building %s\n", scenario.name.c_str(), p.generate.c_str());
+    FF_RETURN_IF_ERROR(buildGenerated(p.generate, scene));
     FF_ASSIGN_OR_RETURN(auto file, storage::SceneFile::open(scene));
     FF_ASSIGN_OR_RETURN(auto context, runtime::OffscreenContext::create());
     FF_ASSIGN_OR_RETURN(auto renderer, runtime::FrameRenderer::create(*file));
@@ -30,17 +45,17 @@ Status runTable2(const BenchOptions& options) {
     CsvTable table({"width", "height", "distance_radii", "full_ms", "hierarchical_ms", "speedup", "triangles_full",
                     "triangles_hierarchical", "cubes", "cube_faces", "cube_faces_per_level", "psnr_hierarchical_db",
                     "psnr_full_db", "ssim_hierarchical", "ssim_full", "holes_hierarchical", "holes_full"});
-    const std::array<std::array<int, 2>, 2> sizes = {{{124, 124}, {640, 480}}};
-    const std::array<float, 4> distances = {1.75f, 3.5f, 7.0f, 14.0f};
-    for (const auto& size : sizes) {
-        for (float d : distances) {
-            std::fprintf(stderr, "table2: %dx%d at %.2f radii\n", size[0], size[1], d);
-            const runtime::Camera camera = runtime::Camera::orbit(bounds, d, 30.0f, 0.0f, glm::radians(45.0f));
+    for (const auto& size : p.sizes) {
+        for (const double distance : p.distances) {
+            const auto d = static_cast<float>(distance);
+            std::fprintf(stderr, "%s: %dx%d at %.2f radii\n", scenario.name.c_str(), size[0], size[1], distance);
+            const runtime::Camera camera = runtime::Camera::orbit(bounds, d, p.azimuth, p.elevation, glm::radians(p.fov));
             runtime::SelectionOptions full;
             full.method = runtime::Method::Full;
             runtime::SelectionOptions hierarchical;
-            hierarchical.epsilonPixels = 1.0f;
-            FF_ASSIGN_OR_RETURN(const runtime::Frame reference, renderer->render(camera, full, size[0], size[1], 4));
+            hierarchical.epsilonPixels = p.eps;
+            FF_ASSIGN_OR_RETURN(
+                    const runtime::Frame reference, renderer->render(camera, full, size[0], size[1], p.supersample));
             FF_ASSIGN_OR_RETURN(const runtime::Frame fullFrame,
                                 timeFrames(*renderer, camera, full, size[0], size[1], 1, options.timedFrames));
             FF_ASSIGN_OR_RETURN(const runtime::Frame hierFrame,
@@ -66,19 +81,46 @@ Status runTable2(const BenchOptions& options) {
                           std::to_string(fullHoles.holes)});
         }
     }
-    const std::filesystem::path csv = options.outDir / "table2.csv";
+    const std::filesystem::path csv = options.outDir / (scenario.name + ".csv");
     FF_RETURN_IF_ERROR(table.write(csv));
     FF_RETURN_IF_ERROR(plotCharts("table2", csv, options.outDir));
-    std::ofstream md(options.outDir / "table2.md");
-    md << "# Chamberlain et al. Table 2 on farfield's tree\n\n"
-       << "`farfield bench table2` on " << file->header().storedTriangles << " triangles (the paper's tree: 52,470), "
-       << "viewed 30 degrees about the vertical axis from a sampled direction, at d scene radii, epsilon = 1 pixel. "
+    std::ofstream md(options.outDir / (scenario.name + ".md"));
+    md << "# " << scenario.title << "\n\n";
+    if (!scenario.description.empty())
+        md << scenario.description << "\n\n";
+    md << "`" << options.command << "` on " << file->header().storedTriangles << " triangles (the paper's tree: 52,470), "
+       << "viewed " << p.azimuth << " degrees about the vertical axis from a sampled direction, at d scene radii, "
+       << "epsilon = " << p.eps << " pixel. "
        << "Times are the median of " << options.timedFrames << " frames (selection + drawing until glFinish) on "
-       << "llvmpipe; PSNR/SSIM against the same view with all geometry, 4x4 supersampled.\n\n"
-       << table.markdown() << "\n![speed against accuracy](table2.png)\n";
-    if (options.workDir.empty())
-        std::filesystem::remove_all(work);
+       << "llvmpipe; PSNR/SSIM against the same view with all geometry, " << p.supersample << "x" << p.supersample
+       << " supersampled.\n\n"
+       << table.markdown() << "\n![speed against accuracy](" << scenario.name << ".png)\n";
+    removeWorkFolder(options);
     return Status::ok();
+}
+
+} // namespace
+
+Result<BenchRun> prepareTable2(const Scenario& scenario) {
+    Table2Params p;
+    ScenarioReader reader = readScenario(scenario);
+    p.generate = reader.string("generate", p.generate);
+    p.sizes = reader.sizes("sizes", p.sizes);
+    p.distances = reader.numbers("distances", p.distances);
+    p.azimuth = static_cast<float>(reader.number("azimuth", p.azimuth));
+    p.elevation = static_cast<float>(reader.number("elevation", p.elevation));
+    p.fov = static_cast<float>(reader.number("fov", p.fov));
+    p.eps = static_cast<float>(reader.number("eps", p.eps));
+    p.supersample = readReferenceSupersample(reader, p.supersample);
+    for (const double d : p.distances)
+        if (!(d > 0.0))
+            reader.fail("distances", "must be positive (scene radii)");
+    if (!(p.fov > 0.0f && p.fov < 179.0f))
+        reader.fail("fov", "must be between 0 and 179 degrees");
+    if (!(p.eps >= 0.0f))
+        reader.fail("eps", "must be >= 0 pixels");
+    FF_RETURN_IF_ERROR(reader.finish());
+    return BenchRun([p, scenario](const BenchOptions& options) { return runTable2(p, scenario, options); });
 }
 
 } // namespace ff::viewer::bench

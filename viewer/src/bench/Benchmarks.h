@@ -1,8 +1,15 @@
 #pragma once
 
+// The benchmark kinds a scenario file can name. Each kind reads and checks its scenario's keys
+// up front (prepare*: errors name the file and the key, nothing has run yet) and returns how to
+// run it; `farfield bench` prepares every scenario it was given before running the first.
+
+#include "Scenario.h"
+
 #include <ff/storage/Status.h>
 
 #include <filesystem>
+#include <functional>
 #include <string>
 
 namespace ff::viewer::bench {
@@ -10,18 +17,33 @@ namespace ff::viewer::bench {
 struct BenchOptions {
     std::filesystem::path outDir = "docs/results";
     std::filesystem::path workDir; ///< scene files (large; default: outDir/scenes, removed after)
-    bool quick = false;            ///< smaller ladders, fewer repetitions (smoke runs)
-    int timedFrames = 3;
+    int timedFrames = 3;           ///< timed frames per measurement (median), after one warm-up
     std::string selfExe;           ///< this executable, for child builds
+    std::string command;           ///< the command line that reruns the scenario, for reports
 };
 
+/** A prepared scenario: runs it, writing OUT/NAME.csv, OUT/NAME*.png, OUT/NAME.md. */
+using BenchRun = std::function<Status(const BenchOptions&)>;
+
 /** Chamberlain et al. '96 Table 2 on the tree: full vs hierarchical at d = 1.75..14 radii. */
-[[nodiscard]] Status runTable2(const BenchOptions& options);
+[[nodiscard]] Result<BenchRun> prepareTable2(const Scenario& scenario);
 /** The recursively instanced forest, 1 to 16384 trees, at one fixed view (log-log chart). */
-[[nodiscard]] Status runForest(const BenchOptions& options);
+[[nodiscard]] Result<BenchRun> prepareForest(const Scenario& scenario);
 /** Working set of a complete frame against scene size; cold-cache teleports on a terrain. */
-[[nodiscard]] Status runPaging(const BenchOptions& options);
+[[nodiscard]] Result<BenchRun> preparePaging(const Scenario& scenario);
 /** Builder throughput and peak RSS on terrain ladders. */
-[[nodiscard]] Status runBuild(const BenchOptions& options);
+[[nodiscard]] Result<BenchRun> prepareBuild(const Scenario& scenario);
+/** Speed against accuracy of methods at fixed views, optionally swept over a parameter. */
+[[nodiscard]] Result<BenchRun> prepareViews(const Scenario& scenario);
+/** Popping, flicker and paging along a generated camera path, per frame and per method. */
+[[nodiscard]] Result<BenchRun> preparePath(const Scenario& scenario);
+
+/** The prepare function of the scenario's kind. */
+[[nodiscard]] Result<BenchRun> prepareScenario(const Scenario& scenario);
+
+/** The work folder for scene files (options.workDir, else OUT/scenes), created. */
+std::filesystem::path workFolder(const BenchOptions& options);
+/** Removes the work folder if it was the default one. */
+void removeWorkFolder(const BenchOptions& options);
 
 } // namespace ff::viewer::bench

@@ -1,0 +1,291 @@
+// `farfield bench SCENARIO` end to end: tiny "views" and "path" scenarios written by the test
+// run through the real binary (CSV rows and columns, charts, report), and scenario mistakes fail
+// with messages that name the problem.
+
+#include "FarfieldProcess.h"
+
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <string>
+#include <vector>
+
+namespace ff::viewer::test {
+namespace {
+
+namespace fs = std::filesystem;
+
+using Row = std::vector<std::string>;
+
+/** A CSV written by `farfield bench` (no quoting: cells never hold commas). */
+std::vector<Row> readCsv(const fs::path& path) {
+    std::vector<Row> rows;
+    std::ifstream in(path);
+    std::string line;
+    while (std::getline(in, line)) {
+        Row row;
+        std::stringstream cells(line);
+        std::string cell;
+        while (std::getline(cells, cell, ','))
+            row.push_back(cell);
+        if (!line.empty() && line.back() == ',')
+            row.emplace_back(); // a trailing empty cell
+        rows.push_back(row);
+    }
+    return rows;
+}
+
+std::string readText(const fs::path& path) {
+    std::ifstream in(path);
+    std::stringstream text;
+    text << in.rdbuf();
+    return text.str();
+}
+
+void writeText(const fs::path& path, const std::string& text) {
+    std::ofstream(path) << text;
+}
+
+/** The cell of `column` in `row`, by the header's column names. */
+std::string cell(const std::vector<Row>& csv, std::size_t row, const std::string& column) {
+    for (std::size_t i = 0; i < csv[0].size(); ++i)
+        if (csv[0][i] == column)
+            return i < csv[row].size() ? csv[row][i] : std::string("<missing cell>");
+    return "<no column " + column + ">";
+}
+
+/** The current directory for the test's scope (the child farfield inherits it). */
+class ScopedCurrentPath {
+public:
+    explicit ScopedCurrentPath(const fs::path& path)
+        : mPrevious(fs::current_path()) {
+        fs::current_path(path);
+    }
+    ~ScopedCurrentPath() { fs::current_path(mPrevious); }
+    ScopedCurrentPath(const ScopedCurrentPath&) = delete;
+    ScopedCurrentPath& operator=(const ScopedCurrentPath&) = delete;
+
+private:
+    fs::path mPrevious;
+};
+
+constexpr const char* kViewsScenario = R"({
+  "name": "tiny-views",
+  "title": "A tiny views scenario",
+  "description": "Written by TestBenchCommand.",
+  "kind": "views",
+  "scene": {"generate": "forest:trees=1"},
+  "size": [64, 48],
+  "views": [{"label": "d6", "distance": 6, "azimuth": 45, "elevation": 35, "fov": 45}],
+  "reference": {"supersample": 2},
+  "methods": [
+    {"label": "full", "method": "full"},
+    {"label": "faces", "method": "hierarchical", "eps": 1, "cube_draw": "faces"}
+  ],
+  "sweep": {"parameter": "eps", "values": [1, 4]}
+})";
+
+constexpr const char* kPathScenario = R"({
+  "name": "tiny-path",
+  "title": "A tiny path scenario",
+  "kind": "path",
+  "scene": {"generate": "forest:trees=1"},
+  "size": [64, 48],
+  "path": {"generator": "orbit", "frames": 3},
+  "methods": [
+    {"label": "faces", "eps": 1, "cube_draw": "faces"},
+    {"label": "coarse", "eps": 8, "cube_draw": "points"}
+  ]
+})";
+
+TEST(BenchCommandTest, ViewsScenarioWritesOneRowPerMeasurementChartsAndReport) {
+    const fs::path dir = freshTestDir();
+    writeText(dir / "tiny-views.json", kViewsScenario);
+    const fs::path out = dir / "out";
+    const ProcessResult r = runFarfield(
+            {"bench", (dir / "tiny-views.json").string(), "--out", out.string(), "--frames", "1"},
+            dir);
+    ASSERT_EQ(r.exitCode, 0) << r.describe();
+
+    const std::vector<Row> csv = readCsv(out / "tiny-views.csv");
+    ASSERT_FALSE(csv.empty());
+    const Row expectedColumns = {
+            "view",
+            "method",
+            "selection",
+            "eps",
+            "cube_draw",
+            "sweep_parameter",
+            "sweep_value",
+            "width",
+            "height",
+            "frame_ms",
+            "select_ms",
+            "draw_ms",
+            "triangles",
+            "cubes",
+            "psnr_srgb",
+            "ssim",
+            "holes_fraction",
+            "over_coverage_fraction",
+            "reference_covered_pixels",
+            "scene_triangles",
+            "scene_file_bytes"};
+    EXPECT_EQ(csv[0], expectedColumns);
+    // full once (not swept), faces at eps 1 and 4.
+    ASSERT_EQ(csv.size(), 4u);
+    EXPECT_EQ(cell(csv, 1, "method"), "full");
+    EXPECT_EQ(cell(csv, 1, "sweep_value"), "");
+    EXPECT_EQ(cell(csv, 2, "method"), "faces");
+    EXPECT_EQ(cell(csv, 2, "sweep_value"), "1");
+    EXPECT_EQ(cell(csv, 3, "sweep_value"), "4");
+    EXPECT_EQ(cell(csv, 3, "eps"), "4.000");
+    for (std::size_t row = 1; row < csv.size(); ++row) {
+        SCOPED_TRACE("row " + std::to_string(row));
+        EXPECT_EQ(csv[row].size(), expectedColumns.size());
+        EXPECT_EQ(cell(csv, row, "view"), "d6");
+        EXPECT_EQ(cell(csv, row, "width"), "64");
+        EXPECT_GT(std::stod(cell(csv, row, "frame_ms")), 0.0);
+        EXPECT_GT(std::stod(cell(csv, row, "psnr_srgb")), 10.0);
+        EXPECT_GT(std::stoull(cell(csv, row, "reference_covered_pixels")), 0u);
+        EXPECT_GT(std::stoull(cell(csv, row, "scene_triangles")), 50'000u);
+    }
+    // The coarser setting draws fewer triangles.
+    EXPECT_LT(std::stoull(cell(csv, 3, "triangles")), std::stoull(cell(csv, 2, "triangles")));
+
+    EXPECT_TRUE(fs::is_regular_file(out / "tiny-views.png"));
+    EXPECT_TRUE(fs::is_regular_file(out / "tiny-views-sweep.png"));
+    const std::string md = readText(out / "tiny-views.md");
+    EXPECT_NE(md.find("# A tiny views scenario"), std::string::npos) << md;
+    EXPECT_NE(md.find("Written by TestBenchCommand."), std::string::npos) << md;
+    EXPECT_NE(md.find("farfield bench " + (dir / "tiny-views.json").string()), std::string::npos)
+            << md;
+    EXPECT_NE(md.find("](tiny-views.png)"), std::string::npos) << md;
+    EXPECT_NE(md.find("](tiny-views-sweep.png)"), std::string::npos) << md;
+    EXPECT_FALSE(fs::exists(out / "scenes")) << "the default work folder is removed";
+}
+
+TEST(BenchCommandTest, PathScenarioWritesPerFrameAndSummaryCsvChartAndReport) {
+    const fs::path dir = freshTestDir();
+    writeText(dir / "tiny-path.json", kPathScenario);
+    const fs::path out = dir / "out";
+    const ProcessResult r =
+            runFarfield({"bench", (dir / "tiny-path.json").string(), "--out", out.string()}, dir);
+    ASSERT_EQ(r.exitCode, 0) << r.describe();
+
+    const std::vector<Row> frames = readCsv(out / "tiny-path.csv");
+    ASSERT_FALSE(frames.empty());
+    EXPECT_EQ(
+            frames[0],
+            (Row{"method",
+                 "frame",
+                 "time_s",
+                 "frame_ms",
+                 "select_ms",
+                 "draw_ms",
+                 "triangles",
+                 "cubes",
+                 "nodes_deferred",
+                 "resident_bytes",
+                 "psnr_srgb",
+                 "instability"}));
+    ASSERT_EQ(frames.size(), 1u + 2 * 3); // two methods, three frames each
+    EXPECT_EQ(cell(frames, 1, "method"), "faces");
+    EXPECT_EQ(cell(frames, 1, "frame"), "0");
+    EXPECT_EQ(cell(frames, 1, "instability"), "") << "no pair before the first frame";
+    EXPECT_EQ(cell(frames, 6, "method"), "coarse");
+    EXPECT_EQ(cell(frames, 6, "frame"), "2");
+    EXPECT_GE(std::stod(cell(frames, 6, "instability")), 0.0);
+
+    const std::vector<Row> summary = readCsv(out / "tiny-path-summary.csv");
+    ASSERT_EQ(summary.size(), 3u);
+    EXPECT_EQ(
+            summary[0],
+            (Row{"method",
+                 "selection",
+                 "eps",
+                 "cube_draw",
+                 "frames",
+                 "mean_instability",
+                 "p95_instability",
+                 "max_instability",
+                 "mean_psnr",
+                 "min_psnr",
+                 "p50_ms",
+                 "p99_ms",
+                 "debt_frames"}));
+    EXPECT_EQ(cell(summary, 1, "method"), "faces");
+    EXPECT_EQ(cell(summary, 2, "method"), "coarse");
+    EXPECT_EQ(cell(summary, 2, "cube_draw"), "points");
+    EXPECT_EQ(cell(summary, 2, "frames"), "3");
+    EXPECT_GE(
+            std::stod(cell(summary, 2, "max_instability")),
+            std::stod(cell(summary, 2, "mean_instability")));
+
+    EXPECT_TRUE(fs::is_regular_file(out / "tiny-path.png"));
+    const std::string md = readText(out / "tiny-path.md");
+    EXPECT_NE(md.find("# A tiny path scenario"), std::string::npos) << md;
+    EXPECT_NE(md.find("](tiny-path.png)"), std::string::npos) << md;
+}
+
+TEST(BenchCommandTest, UnknownKeyFailsNamingTheKeyAndTheFile) {
+    const fs::path dir = freshTestDir();
+    std::string text = kViewsScenario;
+    text.replace(text.find("\"eps\": 1,"), 9, "\"epsilon\": 1,");
+    writeText(dir / "typo.json", text);
+    writeText(dir / "good.json", kPathScenario);
+    const ProcessResult r = runFarfield(
+            {"bench",
+             (dir / "good.json").string(),
+             (dir / "typo.json").string(),
+             "--out",
+             (dir / "out").string()},
+            dir);
+    EXPECT_TRUE(r.exited && r.exitCode != 0) << r.describe();
+    EXPECT_NE(r.err.find("typo.json"), std::string::npos) << r.err;
+    EXPECT_NE(r.err.find("methods[1]"), std::string::npos) << r.err;
+    EXPECT_NE(r.err.find("unknown key \"epsilon\""), std::string::npos) << r.err;
+    EXPECT_FALSE(fs::exists(dir / "out" / "tiny-path.csv"))
+            << "nothing runs before every scenario is checked";
+}
+
+TEST(BenchCommandTest, BadValueInTheQuickOverridesFailsWithoutQuickToo) {
+    const fs::path dir = freshTestDir();
+    std::string text = kPathScenario;
+    text.insert(text.rfind('}'), R"(, "quick": {"path": {"generator": "spiral"}})");
+    writeText(dir / "bad-quick.json", text);
+    const ProcessResult r = runFarfield(
+            {"bench", (dir / "bad-quick.json").string(), "--out", (dir / "out").string()}, dir);
+    EXPECT_TRUE(r.exited && r.exitCode != 0) << r.describe();
+    EXPECT_NE(r.err.find("quick overrides"), std::string::npos) << r.err;
+    EXPECT_NE(r.err.find("path.generator"), std::string::npos) << r.err;
+    EXPECT_NE(r.err.find("spiral"), std::string::npos) << r.err;
+}
+
+TEST(BenchCommandTest, MissingScenarioIsNamedAndTheAvailableOnesListed) {
+    const fs::path dir = freshTestDir();
+    fs::create_directories(dir / "bench");
+    writeText(dir / "bench" / "tiny-views.json", kViewsScenario);
+    const ScopedCurrentPath cwd(dir);
+
+    const ProcessResult missing = runFarfield({"bench", "no-such-scenario"}, dir);
+    EXPECT_TRUE(missing.exited && missing.exitCode != 0) << missing.describe();
+    EXPECT_NE(missing.err.find("\"no-such-scenario\" not found"), std::string::npos) << missing.err;
+    EXPECT_NE(missing.err.find("bench/no-such-scenario.json"), std::string::npos) << missing.err;
+    EXPECT_NE(missing.err.find("available: tiny-views"), std::string::npos) << missing.err;
+
+    const ProcessResult missingFile = runFarfield({"bench", "elsewhere/none.json"}, dir);
+    EXPECT_TRUE(missingFile.exited && missingFile.exitCode != 0) << missingFile.describe();
+    EXPECT_NE(missingFile.err.find("no file elsewhere/none.json"), std::string::npos)
+            << missingFile.err;
+
+    const ProcessResult list = runFarfield({"bench", "--list"}, dir);
+    EXPECT_EQ(list.exitCode, 0) << list.describe();
+    EXPECT_NE(list.out.find("tiny-views"), std::string::npos) << list.out;
+    EXPECT_NE(list.out.find("A tiny views scenario"), std::string::npos) << list.out;
+}
+
+} // namespace
+} // namespace ff::viewer::test

@@ -1,0 +1,320 @@
+// "path" scenarios: popping, flicker and paging along a generated camera path. Every frame of
+// the path is rendered once with all geometry (the reference); then each method flies the path
+// (resident, or through a cold streaming cache of "cache_mb"), and every frame is compared with
+// its reference: PSNR, and the temporal instability of ImageMetrics.h (the approximation's
+// frame-to-frame change beyond the reference's). Keys: bench/README.md.
+
+#include "BenchSupport.h"
+#include "Benchmarks.h"
+#include "CameraOptions.h"
+#include "ScenarioParts.h"
+#include "StreamingPages.h"
+
+#include <ff/cache/PageCache.h>
+#include <ff/cache/ScenePageSource.h>
+#include <ff/runtime/CameraPathGenerators.h>
+#include <ff/runtime/ImageMetrics.h>
+#include <ff/runtime/OffscreenContext.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace ff::viewer::bench {
+
+namespace {
+
+struct PathParams {
+    SceneSpec scene;
+    std::array<int, 2> size = {640, 480};
+    std::string generator = "orbit";
+    runtime::PathGeneratorOptions path;
+    int supersample = 1;
+    std::vector<MethodSpec> methods;
+    /** 0: every page resident (memory map); else a cold streaming cache of this many MiB. */
+    std::int64_t cacheMb = 0;
+    std::int64_t ioThreads = 2;        ///< as `farfield replay`
+    std::int64_t uploadsPerFrame = 64; ///< as `farfield replay`
+    std::int64_t prefetchFrames = 4;   ///< as `farfield replay`
+};
+
+double percentile(std::vector<double> values, double p) {
+    if (values.empty())
+        return 0.0;
+    std::sort(values.begin(), values.end());
+    const auto index = static_cast<std::size_t>(std::ceil(p * static_cast<double>(values.size())));
+    return values[std::min(index == 0 ? 0 : index - 1, values.size() - 1)];
+}
+
+double mean(const std::vector<double>& values) {
+    double sum = 0.0;
+    for (const double v : values)
+        sum += v;
+    return values.empty() ? 0.0 : sum / static_cast<double>(values.size());
+}
+
+Result<runtime::CameraPath> makePath(const PathParams& p, const runtime::Bounds& bounds) {
+    if (p.generator == "flythrough")
+        return runtime::makeFlythroughPath(bounds, p.path);
+    if (p.generator == "teleports")
+        return runtime::makeTeleportPath(bounds, p.path);
+    return runtime::makeOrbitPath(bounds, p.path);
+}
+
+/** The pages a method draws from: the memory map, or a cold streaming cache. */
+struct MethodPages {
+    std::optional<StreamingPages> streaming;
+    std::unique_ptr<runtime::FrameRenderer> renderer;
+};
+
+Result<MethodPages> openPages(
+        const PathParams& p,
+        const storage::SceneFile& file,
+        const std::filesystem::path& scenePath) {
+    MethodPages pages;
+    if (p.cacheMb == 0) {
+        FF_ASSIGN_OR_RETURN(pages.renderer, runtime::FrameRenderer::create(file));
+        return pages;
+    }
+    FF_ASSIGN_OR_RETURN(
+            std::unique_ptr<cache::ScenePageSource> source,
+            cache::ScenePageSource::open(scenePath));
+    FF_ASSIGN_OR_RETURN(
+            StreamingPages streaming,
+            openStreaming(
+                    file,
+                    std::shared_ptr<cache::IPageSource>(std::move(source)),
+                    static_cast<std::uint64_t>(p.cacheMb) << 20,
+                    static_cast<unsigned>(p.ioThreads)));
+    pages.streaming = std::move(streaming);
+    FF_ASSIGN_OR_RETURN(
+            pages.renderer, runtime::FrameRenderer::create(file, *pages.streaming->access));
+    return pages;
+}
+
+Status runPath(const PathParams& p, const Scenario& scenario, const BenchOptions& options) {
+    std::filesystem::create_directories(options.outDir);
+    const std::filesystem::path work = workFolder(options);
+    const std::filesystem::path scenePath = work / (scenario.name + ".ffs");
+    std::fprintf(stderr, "%s: building the scene\n", scenario.name.c_str());
+    FF_RETURN_IF_ERROR(
+            buildScene(p.scene, {}, scenePath, options.selfExe).withContext(scenario.where()));
+    FF_ASSIGN_OR_RETURN(auto file, storage::SceneFile::open(scenePath));
+    const runtime::Bounds bounds = sceneBounds(*file);
+    auto path = makePath(p, bounds);
+    if (!path)
+        return path.status().withContext(scenario.where() + ": path");
+    const std::int64_t frames = path->frameCount();
+    const int width = p.size[0];
+    const int height = p.size[1];
+    FF_ASSIGN_OR_RETURN(auto context, runtime::OffscreenContext::create());
+    auto cameraAt = [&](std::int64_t f) {
+        runtime::Camera camera =
+                path->sample(path->frameTime(std::clamp<std::int64_t>(f, 0, frames - 1)));
+        camera.fitClipPlanes(bounds);
+        return camera;
+    };
+
+    // ---- the reference of every frame: all geometry, resident ------------------------------
+    std::fprintf(
+            stderr,
+            "%s: %lld reference frames\n",
+            scenario.name.c_str(),
+            static_cast<long long>(frames));
+    std::vector<runtime::Image> references;
+    {
+        FF_ASSIGN_OR_RETURN(auto renderer, runtime::FrameRenderer::create(*file));
+        runtime::SelectionOptions full;
+        full.method = runtime::Method::Full;
+        for (std::int64_t f = 0; f < frames; ++f) {
+            FF_ASSIGN_OR_RETURN(
+                    runtime::Frame frame,
+                    renderer->render(cameraAt(f), full, width, height, p.supersample));
+            references.push_back(std::move(frame.image));
+        }
+    }
+
+    CsvTable perFrame(
+            {"method",
+             "frame",
+             "time_s",
+             "frame_ms",
+             "select_ms",
+             "draw_ms",
+             "triangles",
+             "cubes",
+             "nodes_deferred",
+             "resident_bytes",
+             "psnr_srgb",
+             "instability"});
+    CsvTable summary(
+            {"method",
+             "selection",
+             "eps",
+             "cube_draw",
+             "frames",
+             "mean_instability",
+             "p95_instability",
+             "max_instability",
+             "mean_psnr",
+             "min_psnr",
+             "p50_ms",
+             "p99_ms",
+             "debt_frames"});
+    for (const MethodSpec& method : p.methods) {
+        std::fprintf(stderr, "%s: method %s\n", scenario.name.c_str(), method.label.c_str());
+        FF_ASSIGN_OR_RETURN(MethodPages pages, openPages(p, *file, scenePath));
+        cache::PageCache* pageCache = pages.streaming ? pages.streaming->cache.get() : nullptr;
+        runtime::TemporalInstabilityAccumulator accumulator;
+        std::vector<double> instability, psnr, frameMs;
+        std::uint64_t debtFrames = 0;
+        runtime::Image previous;
+        for (std::int64_t f = 0; f < frames; ++f) {
+            double pumpMs = 0.0;
+            if (pageCache) {
+                if (p.prefetchFrames > 0)
+                    pages.renderer->setPrefetchCamera(cameraAt(f + p.prefetchFrames));
+                const auto start = std::chrono::steady_clock::now();
+                pageCache->pump(static_cast<std::size_t>(p.uploadsPerFrame));
+                pumpMs = std::chrono::duration<double, std::milli>(
+                                 std::chrono::steady_clock::now() - start)
+                                 .count();
+            }
+            FF_ASSIGN_OR_RETURN(
+                    runtime::Frame frame,
+                    pages.renderer->render(cameraAt(f), method.selection, width, height));
+            const runtime::Image& reference = references[static_cast<std::size_t>(f)];
+            FF_ASSIGN_OR_RETURN(
+                    const runtime::ColorError color, runtime::colorError(frame.image, reference));
+            std::string pairCell;
+            if (f > 0) {
+                FF_ASSIGN_OR_RETURN(
+                        const double pair,
+                        runtime::temporalInstability(
+                                previous,
+                                frame.image,
+                                references[static_cast<std::size_t>(f - 1)],
+                                reference));
+                accumulator.add(pair);
+                instability.push_back(pair);
+                pairCell = formatNumber(pair, 6);
+            }
+            const double ms = pumpMs + frame.stats.totalMs;
+            frameMs.push_back(ms);
+            psnr.push_back(color.psnrSrgb);
+            debtFrames += frame.stats.nodesDeferred > 0 ? 1 : 0;
+            perFrame.addRow(
+                    {method.label,
+                     std::to_string(f),
+                     formatNumber(path->frameTime(f), 4),
+                     formatNumber(ms, 3),
+                     formatNumber(frame.stats.selectMs, 3),
+                     formatNumber(frame.stats.drawMs, 3),
+                     std::to_string(frame.stats.trianglesDrawn),
+                     std::to_string(frame.stats.cubesDrawn),
+                     std::to_string(frame.stats.nodesDeferred),
+                     std::to_string(pageCache ? pageCache->stats().residentBytes : 0),
+                     formatNumber(color.psnrSrgb, 3),
+                     pairCell});
+            previous = std::move(frame.image);
+        }
+        const runtime::TemporalInstability total = accumulator.result();
+        summary.addRow(
+                {method.label,
+                 method.methodName(),
+                 formatNumber(method.selection.epsilonPixels, 3),
+                 method.cubeDrawName(),
+                 std::to_string(frames),
+                 formatNumber(total.mean, 6),
+                 formatNumber(percentile(instability, 0.95), 6),
+                 formatNumber(total.maxFrame, 6),
+                 formatNumber(mean(psnr), 3),
+                 formatNumber(*std::min_element(psnr.begin(), psnr.end()), 3),
+                 formatNumber(percentile(frameMs, 0.50), 3),
+                 formatNumber(percentile(frameMs, 0.99), 3),
+                 std::to_string(debtFrames)});
+    }
+    file.reset();
+
+    const std::filesystem::path csv = options.outDir / (scenario.name + ".csv");
+    FF_RETURN_IF_ERROR(perFrame.write(csv));
+    FF_RETURN_IF_ERROR(summary.write(options.outDir / (scenario.name + "-summary.csv")));
+    FF_RETURN_IF_ERROR(plotCharts("path", csv, options.outDir));
+    std::ofstream md(options.outDir / (scenario.name + ".md"));
+    md << "# " << scenario.title << "\n\n";
+    if (!scenario.description.empty())
+        md << scenario.description << "\n\n";
+    md << "Command: `" << options.command << "`\n\n"
+       << "Scene: "
+       << (p.scene.gltf.empty() ? "`--generate " + p.scene.generate + "`"
+                                : "`" + p.scene.gltf + "`")
+       << ". Path: `farfield path " << p.generator << "`, " << frames << " frames at " << width
+       << "x" << height << ". Pages: "
+       << (p.cacheMb == 0
+                   ? std::string("all resident")
+                   : "a cold " + std::to_string(p.cacheMb) + " MiB streaming cache per method")
+       << ". Reference: method full, " << p.supersample << "x" << p.supersample
+       << " supersampled, every frame. "
+       << "Instability: the mean over pixels of the approximation's frame-to-frame change in "
+          "linear luminance "
+       << "beyond the reference's own (docs/metrics.md); per frame in `" << scenario.name
+       << ".csv`.\n\n"
+       << summary.markdown() << "\n![instability and PSNR per frame](" << scenario.name
+       << ".png)\n";
+    if (!md)
+        return Status(
+                ErrorCode::IoError,
+                "cannot write " + (options.outDir / (scenario.name + ".md")).string());
+    removeWorkFolder(options);
+    return Status::ok();
+}
+
+} // namespace
+
+Result<BenchRun> preparePath(const Scenario& scenario) {
+    PathParams p;
+    ScenarioReader reader = readScenario(scenario);
+    p.scene = readSceneSpec(reader);
+    p.size = reader.size("size", p.size);
+    ScenarioReader path = reader.object("path");
+    if (!reader.has("path"))
+        reader.fail("path", "missing: e.g. {\"generator\": \"orbit\", \"frames\": 60}");
+    p.generator = path.choice("generator", p.generator, {"orbit", "flythrough", "teleports"});
+    p.path.frames = path.integer("frames", p.path.frames);
+    p.path.fps = path.number("fps", p.path.fps);
+    const std::int64_t seed = path.integer("seed", 1);
+    p.path.seed = static_cast<std::uint64_t>(std::max<std::int64_t>(0, seed));
+    p.path.teleports = path.integer("teleports", p.path.teleports);
+    p.path.fovDegrees = path.number("fov", p.path.fovDegrees);
+    if (p.path.frames < 2)
+        path.fail("frames", "needs at least 2 frames (instability compares consecutive frames)");
+    if (seed < 0)
+        path.fail("seed", "must be >= 0");
+    if (!(p.path.fps > 0.0))
+        path.fail("fps", "must be positive");
+    if (!(p.path.fovDegrees > 0.0 && p.path.fovDegrees < 179.0))
+        path.fail("fov", "must be between 0 and 179 degrees");
+    if (p.generator == "teleports" &&
+        (p.path.teleports < 1 || p.path.frames < 2 * p.path.teleports))
+        path.fail("teleports", "needs teleports >= 1 and frames >= 2 * teleports");
+    p.supersample = readReferenceSupersample(reader, p.supersample);
+    p.methods = readMethods(reader);
+    p.cacheMb = reader.integer("cache_mb", p.cacheMb);
+    p.ioThreads = reader.integer("io_threads", p.ioThreads);
+    p.uploadsPerFrame = reader.integer("uploads_per_frame", p.uploadsPerFrame);
+    p.prefetchFrames = reader.integer("prefetch_frames", p.prefetchFrames);
+    if (p.cacheMb < 0 || p.ioThreads < 1 || p.uploadsPerFrame < 1 || p.prefetchFrames < 0)
+        reader.fail(
+                "",
+                "cache_mb and prefetch_frames must be >= 0, io_threads and uploads_per_frame >= 1");
+    FF_RETURN_IF_ERROR(reader.finish());
+    return BenchRun(
+            [p, scenario](const BenchOptions& options) { return runPath(p, scenario, options); });
+}
+
+} // namespace ff::viewer::bench

@@ -1,0 +1,141 @@
+#include "ScenarioParts.h"
+
+#include "BenchSupport.h"
+
+#include <cmath>
+#include <set>
+
+namespace ff::viewer::bench {
+
+SceneSpec readSceneSpec(ScenarioReader& reader) {
+    SceneSpec spec;
+    if (!reader.has("scene")) {
+        reader.fail("scene", "missing: {\"gltf\": FILE} or {\"generate\": \"forest:trees=1\"}");
+        return spec;
+    }
+    ScenarioReader scene = reader.object("scene");
+    spec.gltf = scene.string("gltf", "");
+    spec.generate = scene.string("generate", "");
+    if (spec.gltf.empty() == spec.generate.empty())
+        scene.fail("", "give exactly one of \"gltf\" (a file) and \"generate\" (a generator spec)");
+    if (auto expanded = expandShared(spec.gltf))
+        spec.gltf = *expanded;
+    else
+        scene.fail("gltf", expanded.status().message());
+    for (const std::string& flag : reader.strings("build", {})) {
+        if (auto expanded = expandShared(flag))
+            spec.buildFlags.push_back(*expanded);
+        else
+            reader.fail("build", expanded.status().message());
+    }
+    return spec;
+}
+
+Status buildScene(
+        const SceneSpec& scene,
+        const std::vector<std::string>& extraFlags,
+        const std::filesystem::path& output,
+        const std::string& selfExe) {
+    std::vector<std::string> argv = {selfExe, "build", "-q", "-o", output.string()};
+    if (!scene.gltf.empty())
+        argv.push_back(scene.gltf);
+    else
+        argv.insert(argv.end(), {"--generate", scene.generate});
+    argv.insert(argv.end(), scene.buildFlags.begin(), scene.buildFlags.end());
+    argv.insert(argv.end(), extraFlags.begin(), extraFlags.end());
+    return runChild(argv).status();
+}
+
+const char* MethodSpec::methodName() const noexcept {
+    return isFull() ? "full" : "hierarchical";
+}
+
+const char* MethodSpec::cubeDrawName() const noexcept {
+    switch (selection.cubeStyle) {
+    case runtime::CubeStyle::Faces:
+        return "faces";
+    case runtime::CubeStyle::Points:
+        return "points";
+    case runtime::CubeStyle::Auto:
+        break;
+    }
+    return "auto";
+}
+
+Status setMethodKey(MethodSpec& method, const std::string& key, const nlohmann::json& value) {
+    if (key == "eps") {
+        if (!value.is_number() || !(value.get<double>() >= 0.0) ||
+            !std::isfinite(value.get<double>()))
+            return Status(
+                    ErrorCode::InvalidArgument,
+                    "eps: expected a number >= 0 (pixels), got " + value.dump());
+        method.selection.epsilonPixels = value.get<float>();
+        return Status::ok();
+    }
+    if (key == "cube_draw") {
+        const std::string style = value.is_string() ? value.get<std::string>() : std::string();
+        if (style == "faces")
+            method.selection.cubeStyle = runtime::CubeStyle::Faces;
+        else if (style == "points")
+            method.selection.cubeStyle = runtime::CubeStyle::Points;
+        else if (style == "auto")
+            method.selection.cubeStyle = runtime::CubeStyle::Auto;
+        else
+            return Status(
+                    ErrorCode::InvalidArgument,
+                    "cube_draw: expected \"faces\", \"points\" or \"auto\", got " + value.dump());
+        return Status::ok();
+    }
+    return Status(
+            ErrorCode::InvalidArgument,
+            "\"" + key + "\" is not a method key a sweep can vary (eps, cube_draw)");
+}
+
+std::vector<MethodSpec> readMethods(ScenarioReader& reader) {
+    std::vector<MethodSpec> methods;
+    if (!reader.has("methods")) {
+        reader.fail(
+                "methods",
+                "missing: e.g. [{\"label\": \"full\", \"method\": \"full\"}, {\"label\": \"eps1\", "
+                "\"eps\": 1}]");
+        return methods;
+    }
+    std::set<std::string> labels;
+    for (ScenarioReader& m : reader.objects("methods")) {
+        MethodSpec method;
+        const std::string kind = m.choice("method", "hierarchical", {"hierarchical", "full"});
+        method.selection.method =
+                kind == "full" ? runtime::Method::Full : runtime::Method::Hierarchical;
+        for (const char* key : kSweepableMethodKeys)
+            if (const nlohmann::json* value = m.raw(key))
+                if (Status status = setMethodKey(method, key, *value); !status)
+                    m.fail("", status.message());
+        method.label = m.string(
+                "label",
+                kind == "full" ? "full" : "eps" + sweepValueText(method.selection.epsilonPixels));
+        if (!labels.insert(method.label).second)
+            m.fail("label",
+                   "\"" + method.label +
+                           "\" is used by two methods; labels name rows and chart series");
+        methods.push_back(std::move(method));
+    }
+    if (methods.empty())
+        reader.fail("methods", "needs at least one method");
+    return methods;
+}
+
+std::string sweepValueText(const nlohmann::json& value) {
+    return value.is_string() ? value.get<std::string>() : value.dump();
+}
+
+int readReferenceSupersample(ScenarioReader& reader, int fallback) {
+    ScenarioReader reference = reader.object("reference");
+    const std::int64_t supersample = reference.integer("supersample", fallback);
+    if (supersample < 1 || supersample > 16) {
+        reference.fail("supersample", "must be 1..16");
+        return fallback;
+    }
+    return static_cast<int>(supersample);
+}
+
+} // namespace ff::viewer::bench

@@ -1,0 +1,66 @@
+#pragma once
+
+// Parts shared by the "views" and "path" scenario kinds: the scene (and how it is built), the
+// methods compared, the full reference. Keys and meanings: bench/README.md.
+
+#include "Scenario.h"
+
+#include <ff/runtime/Selection.h>
+#include <ff/storage/Status.h>
+
+#include <nlohmann/json.hpp>
+
+#include <filesystem>
+#include <string>
+#include <vector>
+
+namespace ff::viewer::bench {
+
+/** "scene" ({"gltf": FILE} or {"generate": SPEC}) and "build" (extra `farfield build` flags),
+ *  with ${shared} expanded. */
+struct SceneSpec {
+    std::string gltf;                    ///< glTF input, or empty
+    std::string generate;                ///< generator spec, or empty
+    std::vector<std::string> buildFlags; ///< appended to `farfield build`
+};
+
+/** Reads "scene" and "build"; errors go to the reader. */
+SceneSpec readSceneSpec(ScenarioReader& reader);
+
+/** Builds the scene into `output` with a child `farfield build -q` (so every flag means what
+ *  it means on the command line), with `extraFlags` after the scenario's own. */
+[[nodiscard]] Status buildScene(
+        const SceneSpec& scene,
+        const std::vector<std::string>& extraFlags,
+        const std::filesystem::path& output,
+        const std::string& selfExe);
+
+/** One method compared: a label and the selection options its keys set. */
+struct MethodSpec {
+    std::string label;
+    runtime::SelectionOptions selection;
+
+    bool isFull() const noexcept { return selection.method == runtime::Method::Full; }
+    /** "full" / "hierarchical" */
+    const char* methodName() const noexcept;
+    /** "faces" / "points" / "auto" */
+    const char* cubeDrawName() const noexcept;
+};
+
+/** Method keys a sweep may vary (the others, label and method, name what is swept). */
+inline constexpr const char* kSweepableMethodKeys[] = {"eps", "cube_draw"};
+
+/** Reads "methods" (a non-empty array; labels unique); errors go to the reader. */
+std::vector<MethodSpec> readMethods(ScenarioReader& reader);
+
+/** Sets one sweepable method key from a JSON value; InvalidArgument naming key and value. */
+[[nodiscard]] Status
+setMethodKey(MethodSpec& method, const std::string& key, const nlohmann::json& value);
+
+/** A sweep value as text: 0.5 -> "0.5", "faces" -> "faces" (for CSV cells and build flags). */
+std::string sweepValueText(const nlohmann::json& value);
+
+/** "reference": {"supersample": N}, N in 1..16; the reference is always method full. */
+int readReferenceSupersample(ScenarioReader& reader, int fallback);
+
+} // namespace ff::viewer::bench
