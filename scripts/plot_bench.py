@@ -37,8 +37,12 @@ def number(text):
     return float(text) if text not in ("", None) else math.nan
 
 
+INF_NOTE = "; identical = top"
+
+
 def capped(values, margin=3.0):
-    """Infinite PSNR (identical images) drawn just above the largest finite value."""
+    """Infinite PSNR (identical images) drawn just above the largest finite value (the axis
+    label then says so, with INF_NOTE)."""
     finite = [v for v in values if math.isfinite(v)]
     top = (max(finite) if finite else 60.0) + margin
     return [top if v == math.inf else v for v in values]
@@ -201,7 +205,8 @@ def views(data, out, name):
                 label="Pareto front")
         ax.set_xscale("log")
         ax.set_xlabel("frame time (ms, log)")
-        ax.set_ylabel("PSNR against the reference (dB, higher is better)")
+        ax.set_ylabel("PSNR against the reference (dB, higher is better"
+                      + (INF_NOTE if math.inf in [number(r["psnr_srgb"]) for r in sel] else "") + ")")
         ax.set_title(f"view {view}")
         ax.grid(True, which="both", alpha=0.3)
         ax.legend(fontsize=7)
@@ -265,7 +270,7 @@ def path(data, out, name):
         ax3.plot(x, [number(r["frame_ms"]) for r in sel], color=f"C{i % 10}", label=m)
     ax1.set_ylabel("instability (linear luminance)")
     ax1.set_title("temporal instability: change beyond the reference's own (lower is better)")
-    ax2.set_ylabel("PSNR (dB)")
+    ax2.set_ylabel("PSNR (dB" + (INF_NOTE if any(number(r["psnr_srgb"]) == math.inf for r in data) else "") + ")")
     ax2.set_title("error against the per-frame full reference (higher is better)")
     ax3.set_ylabel("frame time (ms)")
     ax3.set_xlabel("frame")

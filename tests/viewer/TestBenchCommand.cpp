@@ -287,5 +287,18 @@ TEST(BenchCommandTest, MissingScenarioIsNamedAndTheAvailableOnesListed) {
     EXPECT_NE(list.out.find("A tiny views scenario"), std::string::npos) << list.out;
 }
 
+// The committed scenarios (bench/*.json) parse and pass every check, their quick variants too.
+TEST(BenchCommandTest, CommittedScenariosAreValid) {
+    const fs::path dir = freshTestDir();
+    std::vector<std::string> args = {"bench", "--check"};
+    for (const auto& entry : fs::directory_iterator(FF_BENCH_DIR))
+        if (entry.path().extension() == ".json")
+            args.push_back(entry.path().string());
+    ASSERT_GE(args.size(), 2u + 4u) << "table2, forest, build and paging at least";
+    const ProcessResult r = runFarfield(args, dir);
+    EXPECT_EQ(r.exitCode, 0) << r.describe();
+    EXPECT_NE(r.out.find("table2.json: ok"), std::string::npos) << r.out;
+}
+
 } // namespace
 } // namespace ff::viewer::test

@@ -20,6 +20,7 @@ namespace {
 struct BenchArgs {
     std::vector<std::string> scenarios;
     bool list = false;
+    bool check = false;
     std::string out = "docs/results";
     std::string work;
     int frames = 3;
@@ -48,6 +49,7 @@ Keys and examples: bench/README.md.
 
 Examples:
   farfield bench --list
+  farfield bench --check bench/*.json
   farfield bench table2 --out /tmp/results --quick
   farfield bench bench/*.json --out docs/results)";
 
@@ -111,6 +113,11 @@ int runBench(const BenchArgs& args) {
             return reportError("bench", run.status());
         runs.emplace_back(name, std::move(*run));
     }
+    if (args.check) {
+        for (const auto& run : runs)
+            std::printf("%s: ok\n", run.first.c_str());
+        return 0;
+    }
     bench::BenchOptions options;
     options.outDir = args.out;
     options.workDir = args.work;
@@ -158,6 +165,10 @@ CommandRunner addBenchCommand(CLI::App& app) {
     cmd->footer(kHelpFooter);
     cmd->add_option("scenario", args->scenarios, "Scenario files, or names of bench/NAME.json");
     cmd->add_flag("--list", args->list, "List the scenarios in bench/ with their kinds and titles");
+    cmd->add_flag(
+            "--check",
+            args->check,
+            "Read and check the scenarios (with and without their quick overrides), run nothing");
     cmd->add_option("--out", args->out, "Folder for CSV, charts and reports")
             ->capture_default_str();
     cmd->add_option(

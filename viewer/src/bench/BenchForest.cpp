@@ -7,7 +7,6 @@
 #include <ff/runtime/OffscreenContext.h>
 
 #include <array>
-#include <cmath>
 #include <cstdio>
 #include <fstream>
 #include <string>
@@ -117,19 +116,7 @@ Result<BenchRun> prepareForest(const Scenario& scenario) {
     p.sizes = reader.sizes("sizes", p.sizes);
     p.eps = static_cast<float>(reader.number("eps", p.eps));
     p.fullMeasuredLimit = reader.integer("full_measured_limit", p.fullMeasuredLimit);
-    if (reader.has("trees")) {
-        p.trees.clear();
-        for (const double trees : reader.numbers("trees", {})) {
-            if (std::floor(trees) != trees)
-                reader.fail("trees", "must be whole numbers");
-            p.trees.push_back(static_cast<std::int64_t>(trees));
-        }
-    }
-    for (std::size_t i = 0; i < p.trees.size(); ++i)
-        if (p.trees[i] < 1 || (i > 0 && p.trees[i] <= p.trees[i - 1]))
-            reader.fail("trees", "must be whole numbers >= 1 in increasing order");
-    if (p.trees.empty())
-        reader.fail("trees", "needs at least one forest size");
+    p.trees = reader.ladder("trees", p.trees);
     if (!(p.eps >= 0.0f))
         reader.fail("eps", "must be >= 0 pixels");
     if (p.fullMeasuredLimit < 0)

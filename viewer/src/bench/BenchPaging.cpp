@@ -8,7 +8,6 @@
 
 #include <nlohmann/json.hpp>
 
-#include <cmath>
 #include <cstdio>
 #include <fstream>
 
@@ -109,27 +108,14 @@ Status runPaging(const PagingParams& p, const Scenario& scenario, const BenchOpt
     return Status::ok();
 }
 
-/** A non-empty, increasing list of whole numbers >= 1. */
-std::vector<std::int64_t> readLadder(ScenarioReader& reader, const char* key, std::vector<std::int64_t> fallback) {
-    if (!reader.has(key))
-        return fallback;
-    std::vector<std::int64_t> ladder;
-    for (const double value : reader.numbers(key, {})) {
-        if (!(value >= 1.0) || std::floor(value) != value || (!ladder.empty() && value <= static_cast<double>(ladder.back())))
-            reader.fail(key, "must be whole numbers >= 1 in increasing order");
-        ladder.push_back(static_cast<std::int64_t>(value));
-    }
-    return ladder;
-}
-
 } // namespace
 
 Result<BenchRun> preparePaging(const Scenario& scenario) {
     PagingParams p;
     ScenarioReader reader = readScenario(scenario);
     ScenarioReader ws = reader.object("working_set");
-    p.forestTrees = readLadder(ws, "forest_trees", p.forestTrees);
-    p.terrainTriangles = readLadder(ws, "terrain_triangles", p.terrainTriangles);
+    p.forestTrees = ws.ladder("forest_trees", p.forestTrees);
+    p.terrainTriangles = ws.ladder("terrain_triangles", p.terrainTriangles);
     p.workingSetCacheMb = ws.integer("cache_mb", p.workingSetCacheMb);
     ScenarioReader tp = reader.object("teleports");
     p.teleportTriangles = tp.integer("terrain_triangles", p.teleportTriangles);

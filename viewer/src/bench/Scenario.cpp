@@ -247,17 +247,6 @@ std::int64_t ScenarioReader::integer(const char* key, std::int64_t fallback) {
     return fallback;
 }
 
-bool ScenarioReader::boolean(const char* key, bool fallback) {
-    const nlohmann::json* value = lookUp(key);
-    if (!value)
-        return fallback;
-    if (!value->is_boolean()) {
-        fail(key, "expected true or false, got " + shown(*value));
-        return fallback;
-    }
-    return value->get<bool>();
-}
-
 std::string ScenarioReader::string(const char* key, std::string fallback) {
     const nlohmann::json* value = lookUp(key);
     if (!value)
@@ -310,6 +299,22 @@ ScenarioReader::strings(const char* key, std::vector<std::string> fallback) {
         return fallback;
     }
     return result;
+}
+
+std::vector<std::int64_t>
+ScenarioReader::ladder(const char* key, std::vector<std::int64_t> fallback) {
+    if (!has(key))
+        return fallback;
+    std::vector<std::int64_t> ladder;
+    for (const double value : numbers(key, {})) {
+        if (!(value >= 1.0 && value < 9.0e18) || std::floor(value) != value ||
+            (!ladder.empty() && value <= static_cast<double>(ladder.back()))) {
+            fail(key, "must be whole numbers >= 1 in increasing order");
+            return fallback;
+        }
+        ladder.push_back(static_cast<std::int64_t>(value));
+    }
+    return ladder.empty() ? fallback : ladder;
 }
 
 namespace {

@@ -83,13 +83,14 @@ public:
     bool has(const char* key);
     double number(const char* key, double fallback);
     std::int64_t integer(const char* key, std::int64_t fallback);
-    bool boolean(const char* key, bool fallback);
     std::string string(const char* key, std::string fallback);
     /** A string that must be one of `choices`. */
     std::string
     choice(const char* key, std::string fallback, const std::vector<std::string>& choices);
     std::vector<double> numbers(const char* key, std::vector<double> fallback);
     std::vector<std::string> strings(const char* key, std::vector<std::string> fallback);
+    /** A non-empty, increasing list of whole numbers >= 1 (scene-size ladders). */
+    std::vector<std::int64_t> ladder(const char* key, std::vector<std::int64_t> fallback);
     /** [width, height], both in 1..16384. */
     std::array<int, 2> size(const char* key, std::array<int, 2> fallback);
     /** A non-empty array of [width, height]. */
