@@ -12,6 +12,7 @@
 #include <ff/runtime/OffscreenContext.h>
 
 #include <algorithm>
+#include <array>
 #include <cctype>
 #include <cmath>
 #include <cstdio>
