@@ -35,6 +35,7 @@ const std::vector<generators::GeneratorEntry>& registry() {
             generators::terrainGenerator(),
             generators::moleculeGenerator(),
             generators::blindsGenerator(),
+            generators::sphereGenerator(),
     };
     return kEntries;
 }

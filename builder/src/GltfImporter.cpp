@@ -132,7 +132,7 @@ makeCamera(const tinygltf::Model& model, const tinygltf::Node& node, const glm::
     const tinygltf::Camera& source = model.cameras[static_cast<std::size_t>(node.camera)];
     GltfCamera camera;
     camera.name = !source.name.empty() ? source.name : node.name;
-    camera.eye = glm::vec3(world[3]);
+    camera.eye = glm::dvec3(world[3]);
     const glm::dmat3 basis(world);
     camera.forward = unitOr(basis * glm::dvec3(0.0, 0.0, -1.0), {0.0f, 0.0f, -1.0f});
     camera.up = unitOr(basis * glm::dvec3(0.0, 1.0, 0.0), {0.0f, 1.0f, 0.0f});
@@ -189,7 +189,7 @@ std::string geometryKey(const tinygltf::Model& model, const tinygltf::Mesh& mesh
 
 /** Where a mesh is drawn: its instance transforms, in order of discovery. */
 struct MeshUse {
-    std::vector<glm::mat4> transforms;
+    std::vector<glm::dmat4> transforms;
     bool skinned = false;
 };
 
@@ -372,7 +372,7 @@ private:
     }
 
     Status addInstances(PrototypeId prototype, const MeshUse& use) {
-        for (const glm::mat4& transform : use.transforms) {
+        for (const glm::dmat4& transform : use.transforms) {
             FF_RETURN_IF_ERROR(mSink.addInstance(prototype, transform));
             ++mReport.instances;
         }

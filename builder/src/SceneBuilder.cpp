@@ -1,11 +1,13 @@
 #include <ff/builder/SceneBuilder.h>
 
+#include "FileFrame.h"
 #include "InstanceLevel.h"
 #include "PrototypeBuilder.h"
 #include "RunFile.h"
 
 #include <ff/storage/SceneWriter.h>
 
+#include <glm/gtc/matrix_transform.hpp>
 #include <nlohmann/json.hpp>
 
 #include <algorithm>
@@ -66,7 +68,7 @@ struct SceneBuilder::Impl {
     std::filesystem::path tempDirectory;
     std::unique_ptr<storage::SceneWriter> writer;
     std::vector<std::unique_ptr<PrototypeState>> prototypes;
-    std::vector<std::pair<PrototypeId, glm::mat4>> instances;
+    std::vector<std::pair<PrototypeId, glm::dmat4>> instances; ///< world transforms
     BuildReport report;
     std::size_t spillBufferLimit = 0; ///< total bytes all run files may buffer
     std::size_t spillBuffered = 0;
@@ -196,14 +198,15 @@ Status SceneBuilder::Impl::spill(PrototypeState& proto, std::span<const storage:
     return Status::ok();
 }
 
-Status SceneBuilder::addInstance(PrototypeId prototype, const glm::mat4& transform) {
+Status SceneBuilder::addInstance(PrototypeId prototype, const glm::dmat4& transform) {
     if (prototype >= mImpl->prototypes.size())
         return Status(ErrorCode::InvalidArgument, "unknown prototype " + std::to_string(prototype));
+    const glm::dmat4 world = mImpl->options.placement * transform;
     for (int c = 0; c < 4; ++c)
         for (int r = 0; r < 4; ++r)
-            if (!std::isfinite(transform[c][r]))
+            if (!std::isfinite(transform[c][r]) || !std::isfinite(world[c][r]))
                 return Status(ErrorCode::InvalidInput, "instance of prototype " + std::to_string(prototype) + ": transform is not finite");
-    mImpl->instances.emplace_back(prototype, transform);
+    mImpl->instances.emplace_back(prototype, world);
     return Status::ok();
 }
 
@@ -267,6 +270,15 @@ Result<BuildReport> SceneBuilder::finish() {
     start = phaseEnd("hierarchy", start);
 
     // ---- instance level -----------------------------------------------------------------------
+    // Transforms become float only now, relative to the file frame's origin, so a scene far
+    // from the world origin keeps its precision (storage/FORMAT.md "The file frame").
+    WorldBounds world;
+    for (const auto& [prototype, transform] : s.instances)
+        if (storedIndex[prototype] != kNotStored)
+            world.add(transform, protoRecords[storedIndex[prototype]]);
+    const glm::dvec3 origin = chooseFileOrigin(world);
+    report.origin = {origin.x, origin.y, origin.z};
+    const glm::dmat4 toFileFrame = glm::translate(glm::dmat4(1.0), -origin);
     std::vector<storage::InstanceRecord> instanceRecords;
     instanceRecords.reserve(s.instances.size());
     for (const auto& [prototype, transform] : s.instances) {
@@ -274,7 +286,7 @@ Result<BuildReport> SceneBuilder::finish() {
         if (stored == kNotStored)
             continue;
         storage::InstanceRecord record{};
-        record.transform = toRowMajor3x4(transform);
+        record.transform = toRowMajor3x4(glm::mat4(toFileFrame * transform));
         record.prototype = stored;
         instanceRecords.push_back(record);
         report.instancedTriangles += protoRecords[stored].triangleCount;
@@ -331,6 +343,7 @@ Result<BuildReport> SceneBuilder::finish() {
     header.nodeCount = report.nodes;
     header.storedTriangles = report.storedTriangles;
     header.instancedTriangles = report.instancedTriangles;
+    header.origin = report.origin;
     const std::uint64_t pageCount = s.writer->nextPageIndex();
     FF_RETURN_IF_ERROR(s.writer->commit(header, sections));
     phaseEnd("write", start);
@@ -366,6 +379,7 @@ std::string buildReportJson(const BuildReport& r) {
             {"instance_level_depth", r.instanceLevelDepth},
             {"chunks", r.chunks},
             {"page_size", r.pageSize},
+            {"origin", r.origin},
             {"threads", r.threads},
             {"bytes",
              {{"file", r.fileBytes},

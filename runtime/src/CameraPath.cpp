@@ -530,14 +530,21 @@ CameraPose CameraPath::pose(double time) const {
     return poseInSegment(segment, time);
 }
 
-Camera CameraPath::sample(double time) const {
+Camera CameraPath::sample(double time, const glm::dvec3& frameOrigin) const {
     const CameraPose p = pose(time);
     Camera camera;
-    camera.eye = glm::vec3(p.position);
+    camera.eye = glm::vec3(p.position - frameOrigin);
     camera.forward = glm::normalize(glm::vec3(p.forward()));
     camera.up = glm::normalize(glm::vec3(p.up()));
     camera.fovY = static_cast<float>(glm::radians(p.fovDegrees));
     return camera;
+}
+
+CameraPath CameraPath::translated(const glm::dvec3& offset) const {
+    CameraPath moved = *this;
+    for (CameraKeyframe& k : moved.mKeyframes)
+        k.position += offset;
+    return moved;
 }
 
 std::int64_t CameraPath::frameCount() const noexcept {

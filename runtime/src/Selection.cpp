@@ -25,6 +25,26 @@ bool isCell(const storage::NodeRecord& node) {
     return node.kind == static_cast<std::uint8_t>(storage::NodeKind::Cell);
 }
 
+/** Something finer than the cube exists: children, own triangles or an instance's prototype. */
+bool refinable(const storage::NodeRecord& node) {
+    return !isCell(node) || node.childCount > 0 || node.geometryCount > 0;
+}
+
+/** Largest difference in coverage between two of the cube's axes, each axis the mean alpha of
+ *  its two faces (alpha is the byte's linear coverage, 0..1). */
+float cubeAnisotropy(const storage::NodeRecord& node) {
+    float lo = 1.0f;
+    float hi = 0.0f;
+    for (int axis = 0; axis < 3; ++axis) {
+        const float alpha = (static_cast<float>(node.cube[static_cast<std::size_t>(2 * axis)][3]) +
+                             static_cast<float>(node.cube[static_cast<std::size_t>(2 * axis + 1)][3])) /
+                            (2.0f * 255.0f);
+        lo = std::min(lo, alpha);
+        hi = std::max(hi, alpha);
+    }
+    return hi - lo;
+}
+
 // Priorities for pages nobody can see the size of yet (the root, a full draw).
 constexpr float kTopPriority = 1e30f;
 
@@ -158,7 +178,8 @@ void Selection::visit(const storage::NodeRecord& node, std::uint32_t transform, 
         projected = 2.0f * radius * mPixelScale;
     else if (distance > radius)
         projected = 2.0f * radius * mPixelScale / (distance - radius);
-    if (projected < mOptions.epsilonPixels && (node.flags & storage::kNodeHasCube)) {
+    if (projected < mOptions.epsilonPixels && (node.flags & storage::kNodeHasCube) &&
+        !(refinable(node) && cubeAnisotropy(node) > mOptions.maxCubeAnisotropy)) {
         emitCube(node, transform);
         return;
     }

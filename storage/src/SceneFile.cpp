@@ -63,7 +63,8 @@ Status corrupt(std::uint64_t page, const std::string& what) {
     return {ErrorCode::Corrupt, "page " + std::to_string(page) + ": " + what};
 }
 
-bool allFinite(const std::array<float, 3>& v) noexcept {
+template <typename Real>
+bool allFinite(const std::array<Real, 3>& v) noexcept {
     return std::isfinite(v[0]) && std::isfinite(v[1]) && std::isfinite(v[2]);
 }
 
@@ -283,6 +284,8 @@ Status SceneFile::Impl::openHeader() {
                 0,
                 "root node (page " + std::to_string(header.root.page) + ", slot " +
                         std::to_string(header.root.slot) + ") outside the file's node slots");
+    if (!allFinite(header.origin))
+        return corrupt(0, "the file frame's origin is not finite");
 
     return readSections();
 }

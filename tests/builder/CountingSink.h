@@ -83,12 +83,14 @@ public:
         return Status::ok();
     }
 
-    Status addInstance(PrototypeId prototype, const glm::mat4& transform) override {
+    Status addInstance(PrototypeId prototype, const glm::dmat4& transform) override {
         if (prototype >= prototypes.size())
             return Status(ErrorCode::InvalidArgument, "undeclared prototype");
         instanceHash = fnv1a(instanceHash, &prototype, sizeof(prototype));
-        instanceHash = fnv1a(instanceHash, &transform, sizeof(transform));
-        instances.push_back({prototype, transform});
+        // Hashed as float, as generators produce them, so the pinned hashes keep their meaning.
+        const glm::mat4 single(transform);
+        instanceHash = fnv1a(instanceHash, &single, sizeof(single));
+        instances.push_back({prototype, single});
         return Status::ok();
     }
 

@@ -39,10 +39,10 @@ public:
         return Status::ok();
     }
 
-    Status addInstance(PrototypeId prototype, const glm::mat4& transform) override {
+    Status addInstance(PrototypeId prototype, const glm::dmat4& transform) override {
         if (prototype >= mPrototypes.size())
             return {ErrorCode::InvalidArgument, "unknown prototype"};
-        mInstances.push_back({prototype, transform});
+        mInstances.push_back({prototype, glm::mat4(transform)});
         return Status::ok();
     }
 

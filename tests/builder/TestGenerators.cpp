@@ -102,7 +102,7 @@ TEST(GeneratorCatalogTest, ListsEveryGeneratorWithDocumentedParameters) {
             EXPECT_GT(colon, 0u) << info.name << "." << key;
         }
     }
-    EXPECT_EQ(names, (std::set<std::string>{"forest", "terrain", "molecule", "blinds"}));
+    EXPECT_EQ(names, (std::set<std::string>{"forest", "terrain", "molecule", "blinds", "sphere"}));
 }
 
 TEST(GeneratorCatalogTest, CatalogDefaultsAreAccepted) {
@@ -214,7 +214,8 @@ INSTANTIATE_TEST_SUITE_P(
                         0xf1add161813ba4e9ull,
                         0x412069a3fb9e5606ull},
                 GoldenScene{
-                        "blinds:slabs=20,tilt=30", 0x05b6126a4f525d95ull, 0xd6e975053c6d83d5ull}),
+                        "blinds:slabs=20,tilt=30", 0x05b6126a4f525d95ull, 0xd6e975053c6d83d5ull},
+                GoldenScene{"sphere:triangles=2000,radius=3", 0xe25d855477140997ull, 0xd6e975053c6d83d5ull}),
         [](const ::testing::TestParamInfo<GoldenScene>& param) {
             const std::string spec = param.param.spec;
             return spec.substr(0, spec.find(':'));
@@ -475,6 +476,38 @@ TEST(BlindsGeneratorTest, SlabsAreParallelWithTheRequestedSpacingAndThickness) {
     const glm::vec3 size = sink.prototypes[0].boundsMax - sink.prototypes[0].boundsMin;
     EXPECT_NEAR(size.x, 8.0f, 1e-4f);
     EXPECT_NEAR(size.z, 2.0f, 1e-4f);
+}
+
+TEST(SphereGeneratorTest, TriangleCountFollowsTheLatitudeLongitudeGrid) {
+    CountingSink sink;
+    // 10000 triangles: 50 rings of 100 segments, caps of one triangle per segment.
+    const GeneratorReport report = run("sphere:triangles=10000", sink);
+    EXPECT_EQ(report.storedTriangles, 2u * 100u * 49u);
+    ASSERT_EQ(sink.instances.size(), 1u);
+    EXPECT_EQ(sink.instances[0].transform, glm::mat4(1.0f));
+    EXPECT_EQ(sink.zeroAreaTriangles, 0u);
+    expectReportMatchesSink(report, sink);
+}
+
+TEST(SphereGeneratorTest, IsAClosedOutwardFacingSurfaceWithRadialNormals) {
+    CountingSink sink(/*keepTriangles=*/true);
+    run("sphere:triangles=4000,radius=5", sink);
+    ASSERT_FALSE(sink.triangles.empty());
+    for (const storage::PackedTriangle& t : sink.triangles) {
+        glm::vec3 corner[3];
+        for (int i = 0; i < 3; ++i) {
+            const auto& v = t.vertices[static_cast<std::size_t>(i)];
+            corner[i] = glm::vec3(v.position[0], v.position[1], v.position[2]);
+            ASSERT_NEAR(glm::length(corner[i]), 5.0f, 1e-4f);
+        }
+        const glm::vec3 faceNormal = glm::cross(corner[1] - corner[0], corner[2] - corner[0]);
+        const glm::vec3 centroid = (corner[0] + corner[1] + corner[2]) / 3.0f;
+        ASSERT_GT(glm::dot(faceNormal, centroid), 0.0f) << "a triangle faces inwards";
+    }
+    const glm::vec3 size = sink.prototypes[0].boundsMax - sink.prototypes[0].boundsMin;
+    EXPECT_NEAR(size.x, 10.0f, 1e-3f);
+    EXPECT_NEAR(size.y, 10.0f, 1e-3f);
+    EXPECT_NEAR(size.z, 10.0f, 1e-3f);
 }
 
 } // namespace

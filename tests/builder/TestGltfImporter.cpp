@@ -636,9 +636,9 @@ TEST(GltfImporterTest, CameraNodesAreReported) {
     const GltfCamera& c = cameras[0];
     EXPECT_EQ(c.name, "main");
     EXPECT_TRUE(c.perspective);
-    EXPECT_NEAR(c.eye.x, 11.0f, 1e-5f);
-    EXPECT_NEAR(c.eye.y, 2.0f, 1e-5f);
-    EXPECT_NEAR(c.eye.z, 3.0f, 1e-5f);
+    EXPECT_NEAR(c.eye.x, 11.0, 1e-5);
+    EXPECT_NEAR(c.eye.y, 2.0, 1e-5);
+    EXPECT_NEAR(c.eye.z, 3.0, 1e-5);
     EXPECT_NEAR(c.forward.x, -1.0f, 1e-5f);
     EXPECT_NEAR(c.forward.y, 0.0f, 1e-5f);
     EXPECT_NEAR(c.forward.z, 0.0f, 1e-5f);
@@ -649,7 +649,7 @@ TEST(GltfImporterTest, CameraNodesAreReported) {
     EXPECT_FLOAT_EQ(c.zfar, 100.0f);
     const GltfCamera& o = cameras[1];
     EXPECT_FALSE(o.perspective);
-    EXPECT_EQ(o.eye, glm::vec3(10, 0, 0));
+    EXPECT_EQ(o.eye, glm::dvec3(10, 0, 0));
     EXPECT_EQ(o.forward, glm::vec3(0, 0, -1));
     EXPECT_FLOAT_EQ(o.xmag, 2.0f);
     EXPECT_FLOAT_EQ(o.ymag, 3.0f);

@@ -440,6 +440,8 @@ TEST_F(SceneFileTest, HeaderFieldsAreChecked) {
             {52, 1, 4, ErrorCode::Unsupported, "page 0: unknown header flags 0x1"},
             {56, 11, 4, ErrorCode::Corrupt, "page 0: root node (page 11, slot 0) outside"},
             {60, 42, 4, ErrorCode::Corrupt, "page 0: root node (page 1, slot 42) outside"},
+            {120, 0x7FF8000000000000ull, 8, ErrorCode::Corrupt, "page 0: the file frame's origin is not finite"},
+            {112, 0x7FF0000000000000ull, 8, ErrorCode::Corrupt, "page 0: the file frame's origin is not finite"},
     };
     for (const Case& c : cases) {
         SCOPED_TRACE(c.prefix);

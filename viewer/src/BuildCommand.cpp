@@ -6,8 +6,10 @@
 #include <ff/builder/Generators.h>
 #include <ff/builder/SceneBuilder.h>
 
+#include <glm/gtc/matrix_transform.hpp>
 #include <nlohmann/json.hpp>
 
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -30,6 +32,8 @@ struct BuildArgs {
     float cubeCost = 6.0f;
     float largeTriangleTolerance = 1.0f;
     int maxDepth = 20;
+    std::string offset = "0,0,0";
+    double scale = 1.0;
     std::string report;
     std::string tempDirectory;
     bool quiet = false;
@@ -66,6 +70,12 @@ int runBuild(const BuildArgs& args) {
     options.hierarchy.cubeCost = args.cubeCost;
     options.hierarchy.largeTriangleTolerance = args.largeTriangleTolerance;
     options.hierarchy.maxDepth = args.maxDepth;
+    auto offset = parseDVec3(args.offset);
+    if (!offset)
+        return reportError("build", offset.status().withContext("--offset"));
+    if (!(std::isfinite(args.scale) && args.scale > 0.0))
+        return reportError("build", Status(ErrorCode::InvalidArgument, "--scale must be a positive number"));
+    options.placement = glm::translate(glm::dmat4(1.0), *offset) * glm::scale(glm::dmat4(1.0), glm::dvec3(args.scale));
     ProgressBar progress;
     if (!args.quiet)
         options.progress = [&progress](const builder::BuildProgress& p) { progress.update(p.phase, p.done, p.total); };
@@ -84,7 +94,7 @@ int runBuild(const BuildArgs& args) {
         return reportError("build", sceneBuilder.status());
     if (!args.quiet)
         progress.update("scan", 0, 0);
-    auto input = feedScene(args.input, args.generate, **sceneBuilder);
+    auto input = feedScene(args.input, args.generate, options.placement, **sceneBuilder);
     if (!input)
         return reportError("build", input.status());
     // The metadata section carries the source and its cameras.
@@ -144,6 +154,8 @@ CommandRunner addBuildCommand(CLI::App& app) {
     cmd->add_option("--large-triangle-tolerance", args->largeTriangleTolerance,
                     "Triangles larger than this x their cell stay at the inner node")->capture_default_str();
     cmd->add_option("--max-depth", args->maxDepth, "Deepest octree level")->capture_default_str();
+    cmd->add_option("--offset", args->offset, "Moves the input by x,y,z in the world (after --scale)")->capture_default_str();
+    cmd->add_option("--scale", args->scale, "Scales the input about the world origin")->capture_default_str();
     cmd->add_option("--report", args->report, "Write the JSON build report here");
     cmd->add_option("--temp-dir", args->tempDirectory, "Directory for spill files (default: beside the output)");
     cmd->add_flag("-q,--quiet", args->quiet, "No progress or summary on stderr");

@@ -37,14 +37,14 @@ Result<std::vector<StoredCamera>> storedCameras(const storage::SceneFile& scene)
         try {
             const auto v = [&c](const char* key) {
                 const auto a = c.at(key);
-                return glm::vec3(a.at(0).get<float>(), a.at(1).get<float>(), a.at(2).get<float>());
+                return glm::dvec3(a.at(0).get<double>(), a.at(1).get<double>(), a.at(2).get<double>());
             };
             StoredCamera camera;
             camera.name = c.value("name", std::string());
             camera.perspective = c.value("perspective", true);
             camera.eye = v("eye");
-            camera.forward = v("forward");
-            camera.up = v("up");
+            camera.forward = glm::vec3(v("forward"));
+            camera.up = glm::vec3(v("up"));
             if (c.contains("yfov"))
                 camera.yfovRadians = c.at("yfov").get<float>();
             camera.ymag = c.value("ymag", 1.0f);
@@ -75,8 +75,14 @@ runtime::Bounds sceneBounds(const storage::SceneFile& scene) {
     return {{h.boundsMin[0], h.boundsMin[1], h.boundsMin[2]}, {h.boundsMax[0], h.boundsMax[1], h.boundsMax[2]}};
 }
 
+glm::dvec3 sceneOrigin(const storage::SceneFile& scene) {
+    const auto& o = scene.header().origin;
+    return {o[0], o[1], o[2]};
+}
+
 Result<runtime::Camera> CameraOptions::resolve(const storage::SceneFile& scene) const {
     const runtime::Bounds bounds = sceneBounds(scene);
+    const glm::dvec3 origin = sceneOrigin(scene);
     if (!(fovDegrees > 0.0f && fovDegrees < 179.0f))
         return Status(ErrorCode::InvalidArgument, "--fov must be between 0 and 179 degrees");
     const float fov = glm::radians(fovDegrees);
@@ -89,7 +95,7 @@ Result<runtime::Camera> CameraOptions::resolve(const storage::SceneFile& scene) 
             return Status(ErrorCode::InvalidArgument, "--path-frame " + std::to_string(frame) + ": " + path + " has " +
                                                               std::to_string(cameraPath.frameCount()) + " frames (0 to " +
                                                               std::to_string(cameraPath.frameCount() - 1) + ")");
-        runtime::Camera result = cameraPath.sample(cameraPath.frameTime(frame));
+        runtime::Camera result = cameraPath.sample(cameraPath.frameTime(frame), origin);
         result.fitClipPlanes(bounds);
         return result;
     }
@@ -108,7 +114,8 @@ Result<runtime::Camera> CameraOptions::resolve(const storage::SceneFile& scene) 
             return Status(ErrorCode::NotFound, "--camera " + camera + ": the scene has " +
                                                        std::to_string(cameras.size()) + " glTF camera(s)");
         const StoredCamera& c = cameras[static_cast<std::size_t>(index)];
-        runtime::Camera result = runtime::Camera::lookAt(c.eye, c.eye + c.forward, c.up, c.yfovRadians.value_or(fov));
+        const glm::vec3 eyeInFile(c.eye - origin);
+        runtime::Camera result = runtime::Camera::lookAt(eyeInFile, eyeInFile + c.forward, c.up, c.yfovRadians.value_or(fov));
         result.orthographic = !c.perspective;
         result.orthoHalfHeight = c.ymag;
         result.fitClipPlanes(bounds);
@@ -117,9 +124,11 @@ Result<runtime::Camera> CameraOptions::resolve(const storage::SceneFile& scene) 
     if (!eye.empty() || !target.empty()) {
         if (eye.empty() || target.empty())
             return Status(ErrorCode::InvalidArgument, "--eye and --target go together");
-        FF_ASSIGN_OR_RETURN(const glm::vec3 e, parseVec3(eye));
-        FF_ASSIGN_OR_RETURN(const glm::vec3 t, parseVec3(target));
+        FF_ASSIGN_OR_RETURN(const glm::dvec3 worldEye, parseDVec3(eye));
+        FF_ASSIGN_OR_RETURN(const glm::dvec3 worldTarget, parseDVec3(target));
         FF_ASSIGN_OR_RETURN(const glm::vec3 u, parseVec3(up));
+        const glm::vec3 e(worldEye - origin);
+        const glm::vec3 t(worldTarget - origin);
         if (e == t)
             return Status(ErrorCode::InvalidArgument, "--eye and --target must differ");
         runtime::Camera result = runtime::Camera::lookAt(e, t, u, fov);

@@ -32,14 +32,18 @@ struct CameraOptions {
     [[nodiscard]] Result<runtime::Camera> resolve(const storage::SceneFile& scene) const;
 };
 
-/** World bounds of a scene file. */
+/** Bounds of a scene file, in its own frame (where the runtime draws). */
 runtime::Bounds sceneBounds(const storage::SceneFile& scene);
+
+/** World position of the scene file frame's origin (storage/FORMAT.md "The file frame"): world
+ *  coordinates the user gives (--eye, camera paths, glTF cameras) minus this are file frame. */
+glm::dvec3 sceneOrigin(const storage::SceneFile& scene);
 
 /** A camera of the source glTF, as the builder stored it in the scene's metadata ("cameras"). */
 struct StoredCamera {
     std::string name;
     bool perspective = true;
-    glm::vec3 eye{0.0f};
+    glm::dvec3 eye{0.0};                  ///< world space
     glm::vec3 forward{0.0f, 0.0f, -1.0f}; ///< unit
     glm::vec3 up{0.0f, 1.0f, 0.0f};       ///< unit
     std::optional<float> yfovRadians;     ///< perspective only

@@ -47,7 +47,7 @@ Result<runtime::CameraPath> gltfCameraPath(const storage::SceneFile& scene, cons
                     args.generator.fovDegrees);
         runtime::CameraKeyframe k;
         k.time = static_cast<double>(i);
-        k.position = glm::dvec3(c.eye);
+        k.position = c.eye;
         if (!(glm::dot(c.forward, c.forward) > 0.0f))
             return Status(
                     ErrorCode::Corrupt,
@@ -86,6 +86,9 @@ int runPath(const PathArgs& args) {
         path = gltfCameraPath(**scene, args);
     if (!path)
         return reportError("path", path.status().withContext(args.kind));
+    // Generators fit the path to the bounds in the file's frame; files hold world coordinates.
+    if (args.kind != "gltf")
+        path = path->translated(sceneOrigin(**scene));
 
     std::ofstream file(args.output, std::ios::binary | std::ios::trunc);
     file << path->toJson();

@@ -26,6 +26,7 @@ struct RenderArgs {
     float epsilon = 1.0f;
     std::string method = "hierarchical";
     std::string cubeDraw = "auto";
+    float cubeAnisotropy = 1.0f;
     int supersample = 1;
     int frames = 1;
     std::string stats;
@@ -74,6 +75,7 @@ int runRender(const RenderArgs& args) {
     selection.cubeStyle = args.cubeDraw == "faces" ? runtime::CubeStyle::Faces
                          : args.cubeDraw == "points" ? runtime::CubeStyle::Points
                                                      : runtime::CubeStyle::Auto;
+    selection.maxCubeAnisotropy = args.cubeAnisotropy;
     nlohmann::json frames = nlohmann::json::array();
     Result<runtime::Frame> frame = Status(ErrorCode::Internal, "no frame rendered");
     std::vector<Status> failures;
@@ -125,6 +127,10 @@ CommandRunner addRenderCommand(CLI::App& app) {
     cmd->add_option("--cube-draw", args->cubeDraw, "Color cubes as faces, points (sub-pixel splats) or auto (points when epsilon <= 2)")
             ->capture_default_str()
             ->check(CLI::IsMember({"auto", "faces", "points"}));
+    cmd->add_option("--cube-anisotropy", args->cubeAnisotropy,
+                    "Refuse colour cubes whose coverage differs more than this between axes (0..1; 1 = never)")
+            ->check(CLI::Range(0.0f, 1.0f))
+            ->capture_default_str();
     cmd->add_option("--supersample", args->supersample, "Render NxN samples per pixel (a reference)")->capture_default_str();
     cmd->add_option("--frames", args->frames, "Render the view this many times (timing; first frame uploads)")->capture_default_str();
     cmd->add_option("--stats", args->stats, "Write the per-frame statistics as JSON here (also printed on stdout)");

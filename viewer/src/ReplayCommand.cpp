@@ -42,6 +42,7 @@ struct ReplayArgs {
     bool sync = false;
     std::string size = "640x480";
     float epsilon = 1.0f;
+    float cubeAnisotropy = 1.0f;
     unsigned ioThreads = 2;
     std::size_t uploadsPerFrame = 64;
     int prefetchFrames = 4;
@@ -158,7 +159,9 @@ int runReplay(const ReplayArgs& args) {
 
     runtime::SelectionOptions selection;
     selection.epsilonPixels = args.epsilon;
+    selection.maxCubeAnisotropy = args.cubeAnisotropy;
     const runtime::Bounds bounds = sceneBounds(**scene);
+    const glm::dvec3 origin = sceneOrigin(**scene);
     const std::int64_t frames = path->frameCount();
     nlohmann::json perFrame = nlohmann::json::array();
     std::ofstream csv;
@@ -183,7 +186,7 @@ int runReplay(const ReplayArgs& args) {
     cache::PageCacheStats previous = pageCache->stats();
 
     for (std::int64_t f = 0; f < frames; ++f) {
-        runtime::Camera camera = path->sample(path->frameTime(f));
+        runtime::Camera camera = path->sample(path->frameTime(f), origin);
         camera.fitClipPlanes(bounds);
         if (!(glm::length(camera.eye - lastEye) <= jump)) { // NaN on the first frame: a jump
             if (!converged && f > 0)
@@ -194,7 +197,7 @@ int runReplay(const ReplayArgs& args) {
         lastEye = camera.eye;
 
         if (args.prefetchFrames > 0 && !args.sync) {
-            runtime::Camera ahead = path->sample(path->frameTime(std::min<std::int64_t>(f + args.prefetchFrames, frames - 1)));
+            runtime::Camera ahead = path->sample(path->frameTime(std::min<std::int64_t>(f + args.prefetchFrames, frames - 1)), origin);
             ahead.fitClipPlanes(bounds);
             (*streaming)->setPrefetchCamera(ahead);
         }
@@ -343,6 +346,10 @@ CommandRunner addReplayCommand(CLI::App& app) {
     cmd->add_flag("--sync", args->sync, "Wait for every page a frame wants (deterministic reference; counts stalls)");
     cmd->add_option("--size", args->size, "Image size WIDTHxHEIGHT")->capture_default_str();
     cmd->add_option("--epsilon", args->epsilon, "Color-cube threshold in pixels")->capture_default_str();
+    cmd->add_option("--cube-anisotropy", args->cubeAnisotropy,
+                    "Refuse colour cubes whose coverage differs more than this between axes (0..1; 1 = never)")
+            ->check(CLI::Range(0.0f, 1.0f))
+            ->capture_default_str();
     cmd->add_option("--io-threads", args->ioThreads, "Background read threads")->capture_default_str();
     cmd->add_option("--uploads-per-frame", args->uploadsPerFrame, "Finished reads installed per frame at most")
             ->capture_default_str();

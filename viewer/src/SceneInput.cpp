@@ -9,12 +9,22 @@ namespace ff::viewer {
 
 namespace {
 
-nlohmann::json vec3Json(const glm::vec3& v) { return {v.x, v.y, v.z}; }
+template <typename Vector>
+nlohmann::json vec3Json(const Vector& v) {
+    return {v.x, v.y, v.z};
+}
+
+glm::vec3 placedDirection(const glm::dmat4& placement, const glm::vec3& direction) {
+    return glm::vec3(glm::normalize(glm::dmat3(placement) * glm::dvec3(direction)));
+}
 
 } // namespace
 
 Result<SceneInputSummary> feedScene(
-        const std::string& input, const std::string& generatorSpec, builder::ISceneSink& sink) {
+        const std::string& input,
+        const std::string& generatorSpec,
+        const glm::dmat4& placement,
+        builder::ISceneSink& sink) {
     SceneInputSummary summary;
     nlohmann::json metadata = nlohmann::json::object();
     if (!generatorSpec.empty()) {
@@ -34,9 +44,9 @@ Result<SceneInputSummary> feedScene(
         for (const builder::GltfCamera& c : report.cameras) {
             cameras.push_back({{"name", c.name},
                                {"perspective", c.perspective},
-                               {"eye", vec3Json(c.eye)},
-                               {"forward", vec3Json(c.forward)},
-                               {"up", vec3Json(c.up)},
+                               {"eye", vec3Json(glm::dvec3(placement * glm::dvec4(c.eye, 1.0)))},
+                               {"forward", vec3Json(placedDirection(placement, c.forward))},
+                               {"up", vec3Json(placedDirection(placement, c.up))},
                                {"yfov", c.yfovRadians},
                                {"aspect", c.aspectRatio},
                                {"znear", c.znear},

@@ -17,8 +17,13 @@ struct SceneInputSummary {
     std::vector<std::string> warnings;
 };
 
-/** Streams a glTF file (`input`) or a generator (`generatorSpec`) into `sink`. */
+/** Streams a glTF file (`input`) or a generator (`generatorSpec`) into `sink`. The glTF's
+ *  cameras go into the metadata in world space, moved by `placement` as the builder moves the
+ *  geometry (BuildOptions::placement). */
 [[nodiscard]] Result<SceneInputSummary> feedScene(
-        const std::string& input, const std::string& generatorSpec, builder::ISceneSink& sink);
+        const std::string& input,
+        const std::string& generatorSpec,
+        const glm::dmat4& placement,
+        builder::ISceneSink& sink);
 
 } // namespace ff::viewer

@@ -57,14 +57,19 @@ Result<glm::ivec2> parseImageSize(std::string_view text) {
 }
 
 Result<glm::vec3> parseVec3(std::string_view text) {
-    glm::vec3 v(0.0f);
+    FF_ASSIGN_OR_RETURN(const glm::dvec3 v, parseDVec3(text));
+    return glm::vec3(v);
+}
+
+Result<glm::dvec3> parseDVec3(std::string_view text) {
+    glm::dvec3 v(0.0);
     std::size_t start = 0;
     for (int i = 0; i < 3; ++i) {
         const std::size_t comma = i < 2 ? text.find(',', start) : text.size();
         if (comma == std::string_view::npos)
             return Status(ErrorCode::InvalidArgument, "'" + std::string(text) + "' must be three numbers: x,y,z");
         FF_ASSIGN_OR_RETURN(const double c, parseNumber(text.substr(start, comma - start), "vector"));
-        v[i] = static_cast<float>(c);
+        v[i] = c;
         start = comma + 1;
     }
     return v;

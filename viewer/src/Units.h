@@ -16,6 +16,8 @@ namespace ff::viewer {
 [[nodiscard]] Result<glm::ivec2> parseImageSize(std::string_view text);
 /** "1,2.5,-3" -> vec3. */
 [[nodiscard]] Result<glm::vec3> parseVec3(std::string_view text);
+/** The same in double precision (world positions far from the origin). */
+[[nodiscard]] Result<glm::dvec3> parseDVec3(std::string_view text);
 /** 1536 -> "1.5 KiB". */
 std::string formatBytes(std::uint64_t bytes);
 

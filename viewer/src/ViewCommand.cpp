@@ -90,11 +90,11 @@ Result<ScriptStep> parseScript(std::string_view text) {
 
 /** The point the initial view orbits about: --target if given, else the scene centre's depth
  *  straight ahead (the centre itself for the default orbit camera). */
-glm::vec3
-initialPivot(const runtime::Camera& camera, const runtime::Bounds& bounds, const ViewArgs& args) {
+glm::vec3 initialPivot(
+        const runtime::Camera& camera, const runtime::Bounds& bounds, const glm::dvec3& origin, const ViewArgs& args) {
     if (!args.camera.target.empty() && args.camera.camera.empty()) {
-        if (auto target = parseVec3(args.camera.target))
-            return *target;
+        if (auto target = parseDVec3(args.camera.target))
+            return glm::vec3(*target - origin);
     }
     const float depth = glm::dot(bounds.center() - camera.eye, camera.forward);
     return camera.eye +
@@ -193,7 +193,7 @@ int runView(const ViewArgs& args) {
     if (!renderer)
         return reportError("view", renderer.status().withContext(args.scene));
 
-    CameraController navigation(*initialCamera, initialPivot(*initialCamera, bounds, args), bounds);
+    CameraController navigation(*initialCamera, initialPivot(*initialCamera, bounds, sceneOrigin(**scene), args), bounds);
 
     // ---- Frame loop ------------------------------------------------------------------------
     using Clock = std::chrono::steady_clock;

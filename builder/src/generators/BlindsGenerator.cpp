@@ -5,22 +5,25 @@
 
 #include "GeneratorKit.h"
 
+#include <algorithm>
 #include <array>
+#include <cmath>
 
 namespace ff::builder::generators {
 
 namespace {
 
-constexpr std::array<ParamDef, 6> kParams = {{
+constexpr std::array<ParamDef, 7> kParams = {{
         {"slabs", "100", "number of slabs, stacked along +Y (1..10000000)"},
         {"spacing", "0.1", "distance between neighbouring slab centres, units"},
         {"thickness", "0.02", "slab thickness along Y, units (less than spacing)"},
         {"width", "10", "slab extent along X, units"},
         {"depth", "1", "slab extent along Z, units"},
         {"tilt", "0", "slat angle about the X axis, degrees (-89..89)"},
+        {"tessellation", "1", "quads along each slab's width (and as many per unit along its depth): "
+                              "lets the octree split the slabs into cells (1..4096)"},
 }};
 
-constexpr std::uint64_t kTrianglesPerSlab = 12;
 
 // Light colours (linear RGB) that differ enough to alias visibly at a grazing angle.
 constexpr std::array<glm::vec4, 2> kSlabColors = {
@@ -35,6 +38,12 @@ struct BlindsParams {
     float width = 0.0f;
     float depth = 0.0f;
     double tiltDegrees = 0.0;
+    std::array<std::uint32_t, 3> segments{1, 1, 1}; ///< quads along the slab's X, Y (thickness), Z
+
+    std::uint64_t trianglesPerSlab() const {
+        const std::uint64_t x = segments[0], y = segments[1], z = segments[2];
+        return 4 * (x * y + y * z + z * x);
+    }
 };
 
 Result<BlindsParams> readParams(const GeneratorSpec& spec) {
@@ -47,12 +56,15 @@ Result<BlindsParams> readParams(const GeneratorSpec& spec) {
     FF_ASSIGN_OR_RETURN(const double width, reader.real("width", 1e-3, 1e6));
     FF_ASSIGN_OR_RETURN(const double depth, reader.real("depth", 1e-3, 1e6));
     FF_ASSIGN_OR_RETURN(p.tiltDegrees, reader.real("tilt", -89.0, 89.0));
+    FF_ASSIGN_OR_RETURN(const std::uint64_t tessellation, reader.integer("tessellation", 1, 4096));
     if (!(thickness < spacing))
         return reader.invalid("thickness", "must be less than spacing, or the slabs intersect");
     p.spacing = static_cast<float>(spacing);
     p.thickness = static_cast<float>(thickness);
     p.width = static_cast<float>(width);
     p.depth = static_cast<float>(depth);
+    const double alongDepth = std::round(static_cast<double>(tessellation) * depth / width);
+    p.segments = {static_cast<std::uint32_t>(tessellation), 1u, static_cast<std::uint32_t>(std::clamp(alongDepth, 1.0, 4096.0))};
     return p;
 }
 
@@ -63,8 +75,9 @@ struct Box {
     std::array<float, 3> half;
 };
 
-/** Six outward-facing quads, two triangles each, flat normals. */
-Status emitBox(const Box& box, const glm::vec4& color, TriangleBatcher& out) {
+/** Six outward-facing faces, each a grid of segments[u] x segments[v] quads of two triangles,
+ *  flat normals. */
+Status emitBox(const Box& box, const std::array<std::uint32_t, 3>& segments, const glm::vec4& color, TriangleBatcher& out) {
     for (int a = 0; a < 3; ++a) {
         const auto ia = static_cast<std::size_t>(a);
         const auto iu = static_cast<std::size_t>((a + 1) % 3);
@@ -76,15 +89,23 @@ Status emitBox(const Box& box, const glm::vec4& color, TriangleBatcher& out) {
                                 (side > 0.0f ? box.half[iu] : box.half[iv]);
             const glm::vec3 v = (side > 0.0f ? box.axis[iv] : box.axis[iu]) *
                                 (side > 0.0f ? box.half[iv] : box.half[iu]);
+            const std::uint32_t nu = side > 0.0f ? segments[iu] : segments[iv];
+            const std::uint32_t nv = side > 0.0f ? segments[iv] : segments[iu];
             const glm::vec3 faceCenter = box.center + normal * box.half[ia];
-            const std::array<SourceVertex, 4> quad = {{
-                    {faceCenter - u - v, normal, color},
-                    {faceCenter + u - v, normal, color},
-                    {faceCenter + u + v, normal, color},
-                    {faceCenter - u + v, normal, color},
-            }};
-            FF_RETURN_IF_ERROR(out.add(quad[0], quad[1], quad[2]));
-            FF_RETURN_IF_ERROR(out.add(quad[0], quad[2], quad[3]));
+            // Grid coordinates -1..1; with one segment these are exactly -u-v, +u-v, ...
+            auto corner = [&](std::uint32_t i, std::uint32_t j) {
+                const float fu = 2.0f * static_cast<float>(i) / static_cast<float>(nu) - 1.0f;
+                const float fv = 2.0f * static_cast<float>(j) / static_cast<float>(nv) - 1.0f;
+                return SourceVertex{faceCenter + fu * u + fv * v, normal, color};
+            };
+            for (std::uint32_t j = 0; j < nv; ++j) {
+                for (std::uint32_t i = 0; i < nu; ++i) {
+                    const std::array<SourceVertex, 4> quad = {
+                            corner(i, j), corner(i + 1, j), corner(i + 1, j + 1), corner(i, j + 1)};
+                    FF_RETURN_IF_ERROR(out.add(quad[0], quad[1], quad[2]));
+                    FF_RETURN_IF_ERROR(out.add(quad[0], quad[2], quad[3]));
+                }
+            }
         }
     }
     return Status::ok();
@@ -107,17 +128,17 @@ Result<GeneratorReport> runBlinds(const GeneratorSpec& spec, ISceneSink& sink) {
     for (std::uint64_t k = 0; k < p.slabs; ++k) {
         const double offset = (static_cast<double>(k) - middle) * static_cast<double>(p.spacing);
         box.center = glm::vec3(0.0f, static_cast<float>(offset), 0.0f);
-        FF_RETURN_IF_ERROR(emitBox(box, kSlabColors[k % kSlabColors.size()], out));
+        FF_RETURN_IF_ERROR(emitBox(box, p.segments, kSlabColors[k % kSlabColors.size()], out));
     }
     FF_RETURN_IF_ERROR(out.flush());
-    FF_RETURN_IF_ERROR(sink.addInstance(prototype, glm::mat4(1.0f)));
+    FF_RETURN_IF_ERROR(sink.addInstance(prototype, glm::dmat4(1.0)));
 
     GeneratorReport report;
     report.storedTriangles = out.added();
     report.triangles = report.storedTriangles;
     report.prototypes = 1;
     report.instances = 1;
-    FF_ASSERT(report.storedTriangles == p.slabs * kTrianglesPerSlab);
+    FF_ASSERT(report.storedTriangles == p.slabs * p.trianglesPerSlab());
     return report;
 }
 

@@ -359,7 +359,7 @@ Result<GeneratorReport> runForest(const GeneratorSpec& spec, ISceneSink& sink) {
                 static_cast<float>((row - middle) * spacing));
         const double yaw = rng.unit();
         const float scale = rng.uniform(0.9f, 1.1f);
-        FF_RETURN_IF_ERROR(sink.addInstance(prototype, makeTransform(position, yaw, scale)));
+        FF_RETURN_IF_ERROR(sink.addInstance(prototype, glm::dmat4(makeTransform(position, yaw, scale))));
     }
 
     GeneratorReport report;

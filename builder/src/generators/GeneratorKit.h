@@ -189,5 +189,6 @@ GeneratorEntry forestGenerator();
 GeneratorEntry terrainGenerator();
 GeneratorEntry moleculeGenerator();
 GeneratorEntry blindsGenerator();
+GeneratorEntry sphereGenerator();
 
 } // namespace ff::builder::generators

@@ -178,7 +178,7 @@ Result<GeneratorReport> runMolecule(const GeneratorSpec& spec, ISceneSink& sink)
     // Pass 2: the same chain again, now placing instances.
     FF_RETURN_IF_ERROR(walkChain(seed, atoms, [&](std::size_t element, const glm::vec3& centre) {
         return sink.addInstance(
-                prototypes[element], makeTransform(centre, 0.0, kElements[element].radius));
+                prototypes[element], glm::dmat4(makeTransform(centre, 0.0, kElements[element].radius)));
     }));
     report.instances = atoms;
     return report;

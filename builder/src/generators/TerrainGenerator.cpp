@@ -220,7 +220,7 @@ Result<GeneratorReport> runTerrain(const GeneratorSpec& spec, ISceneSink& sink) 
     const GridSize grid = chooseGrid(requested);
     FF_ASSIGN_OR_RETURN(const PrototypeId prototype, sink.addPrototype("terrain"));
     // Declared first so a consumer knows the placement before the (possibly huge) stream.
-    FF_RETURN_IF_ERROR(sink.addInstance(prototype, glm::mat4(1.0f)));
+    FF_RETURN_IF_ERROR(sink.addInstance(prototype, glm::dmat4(1.0)));
 
     std::vector<storage::PackedVertex> below(grid.columns + 1);
     std::vector<storage::PackedVertex> above(grid.columns + 1);

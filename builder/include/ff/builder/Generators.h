@@ -46,6 +46,7 @@ struct GeneratorReport {
  *  - terrain:triangles=N, seed — a flat, non-instanced coloured heightfield
  *  - molecule:spheres=N, seed  — spheres of a few element prototypes, instanced
  *  - blinds:slabs=N            — closely spaced parallel thin slabs in one prototype
+ *  - sphere:triangles=N,radius — one large smooth closed surface (latitude-longitude grid)
  */
 [[nodiscard]] Result<GeneratorReport> runGenerator(const GeneratorSpec& spec, ISceneSink& sink);
 

@@ -16,7 +16,7 @@ namespace ff::builder {
 struct GltfCamera {
     std::string name;
     bool perspective = true;
-    glm::vec3 eye{0.0f};
+    glm::dvec3 eye{0.0};                  ///< world space, double like node transforms
     glm::vec3 forward{0.0f, 0.0f, -1.0f}; ///< unit, world space (the node's -Z)
     glm::vec3 up{0.0f, 1.0f, 0.0f};       ///< unit, world space (the node's +Y)
     float yfovRadians = 0.8f;             ///< perspective only

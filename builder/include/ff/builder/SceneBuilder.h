@@ -49,6 +49,9 @@ struct BuildOptions {
     HierarchyParams hierarchy;
     /** Where spill files go; empty = beside the output file. */
     std::filesystem::path tempDirectory;
+    /** Applied to every instance before anything else: moves and scales the whole input in the
+     *  world (`farfield build --offset/--scale`). */
+    glm::dmat4 placement{1.0};
     /** JSON object merged into the file's Metadata section (e.g. source, cameras). */
     std::string metadataJson = "{}";
     std::function<void(const BuildProgress&)> progress;
@@ -85,6 +88,7 @@ struct BuildReport {
     std::uint64_t peakRssBytes = 0;        ///< VmHWM of the process at the end
     std::uint32_t pageSize = 0;
     unsigned threads = 0;
+    std::array<double, 3> origin{}; ///< world position of the file frame's origin
     std::vector<PhaseTime> phases;
 };
 
@@ -108,7 +112,7 @@ public:
     [[nodiscard]] Result<PrototypeId> addPrototype(std::string_view name) override;
     [[nodiscard]] Status addTriangles(
             PrototypeId prototype, std::span<const storage::PackedTriangle> triangles) override;
-    [[nodiscard]] Status addInstance(PrototypeId prototype, const glm::mat4& transform) override;
+    [[nodiscard]] Status addInstance(PrototypeId prototype, const glm::dmat4& transform) override;
 
     /** Replaces BuildOptions::metadataJson (sources learn their cameras only while feeding). */
     void setMetadataJson(std::string json);

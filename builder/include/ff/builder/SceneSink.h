@@ -50,8 +50,9 @@ public:
     [[nodiscard]] virtual Status addTriangles(
             PrototypeId prototype, std::span<const storage::PackedTriangle> triangles) = 0;
 
-    /** Places the prototype in the world with `transform` (affine, column-major glm). */
-    [[nodiscard]] virtual Status addInstance(PrototypeId prototype, const glm::mat4& transform) = 0;
+    /** Places the prototype in the world with `transform` (affine, column-major glm; double, so
+     *  scenes far from the world origin keep their precision until the builder picks the file frame). */
+    [[nodiscard]] virtual Status addInstance(PrototypeId prototype, const glm::dmat4& transform) = 0;
 };
 
 } // namespace ff::builder

@@ -107,9 +107,14 @@ public:
     /** The state at `time` seconds, clamped to [startTime(), endTime()]. Exact at keyframes. */
     CameraPose pose(double time) const;
 
-    /** The camera at `time` (clamped). Clip planes are Camera's defaults: call fitClipPlanes()
-     *  with the scene's bounds before drawing. */
-    Camera sample(double time) const;
+    /** The camera at `time` (clamped), moved into a frame whose origin lies at `frameOrigin`
+     *  (a scene file's origin: paths are in world coordinates, drawing happens in the file's
+     *  frame; the subtraction is done in double). Clip planes are Camera's defaults: call
+     *  fitClipPlanes() with the scene's bounds before drawing. */
+    Camera sample(double time, const glm::dvec3& frameOrigin = glm::dvec3(0.0)) const;
+
+    /** The same path moved by `offset` (e.g. from a scene file's frame into the world). */
+    CameraPath translated(const glm::dvec3& offset) const;
 
     /** Number of frames (>= 1). */
     std::int64_t frameCount() const noexcept;

@@ -33,6 +33,11 @@ struct SelectionOptions {
      *  0 draws geometry everywhere. */
     float epsilonPixels = 1.0f;
     CubeStyle cubeStyle = CubeStyle::Auto;
+    /** A cube whose coverage (alpha) along the three axes differs by more than this is refused
+     *  where the cell can be refined: such a cell (slabs of a venetian blind, a sheet seen
+     *  edge-on) looks opaque from one side and transparent from another, and interpolating its
+     *  faces tears or leaks at views between the axes. 1 never refuses. */
+    float maxCubeAnisotropy = 1.0f;
     /** Multiplies the priority of the pages this selection asks for (prefetch asks below the
      *  frame being drawn). */
     float priorityScale = 1.0f;

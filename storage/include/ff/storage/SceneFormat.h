@@ -98,12 +98,15 @@ struct FileHeader {
     std::uint32_t sectionCount; ///< entries in the table after this header
     std::uint32_t flags;        ///< reserved, 0
     NodeRef root;               ///< the scene's root node (instance level)
-    std::array<float, 3> boundsMin; ///< world bounds of everything drawn
+    std::array<float, 3> boundsMin; ///< bounds of everything drawn, in the file's frame
     std::array<float, 3> boundsMax;
     std::uint64_t nodeCount;          ///< NodeRecords in the file
     std::uint64_t storedTriangles;    ///< PackedTriangles in the file (prototypes counted once)
     std::uint64_t instancedTriangles; ///< triangles as drawn (each instance counted)
-    std::array<std::uint8_t, 48> reserved;
+    /** World position of the file frame's origin: world = origin + stored coordinates. Kept in
+     *  double so a scene far from the world origin keeps float precision in its own frame. */
+    std::array<double, 3> origin;
+    std::array<std::uint8_t, 24> reserved;
 };
 static_assert(sizeof(FileHeader) == 160);
 
