@@ -96,7 +96,7 @@ constexpr const char* kPathScenario = R"({
   "path": {"generator": "orbit", "frames": 3},
   "methods": [
     {"label": "faces", "eps": 1, "cube_draw": "faces"},
-    {"label": "coarse", "eps": 8, "cube_draw": "points"}
+    {"label": "coarse", "eps": 8, "cube_draw": "points", "cube_anisotropy": 0.5}
   ]
 })";
 
@@ -117,6 +117,7 @@ TEST(BenchCommandTest, ViewsScenarioWritesOneRowPerMeasurementChartsAndReport) {
             "selection",
             "eps",
             "cube_draw",
+            "cube_anisotropy",
             "sweep_parameter",
             "sweep_value",
             "width",
@@ -207,6 +208,7 @@ TEST(BenchCommandTest, PathScenarioWritesPerFrameAndSummaryCsvChartAndReport) {
                  "selection",
                  "eps",
                  "cube_draw",
+                 "cube_anisotropy",
                  "frames",
                  "mean_instability",
                  "p95_instability",
@@ -219,6 +221,7 @@ TEST(BenchCommandTest, PathScenarioWritesPerFrameAndSummaryCsvChartAndReport) {
     EXPECT_EQ(cell(summary, 1, "method"), "faces");
     EXPECT_EQ(cell(summary, 2, "method"), "coarse");
     EXPECT_EQ(cell(summary, 2, "cube_draw"), "points");
+    EXPECT_EQ(cell(summary, 2, "cube_anisotropy"), "0.50");
     EXPECT_EQ(cell(summary, 2, "frames"), "3");
     EXPECT_GE(
             std::stod(cell(summary, 2, "max_instability")),

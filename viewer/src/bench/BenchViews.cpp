@@ -161,7 +161,7 @@ SweepSpec readSweep(ScenarioReader& reader, const std::vector<MethodSpec>& metho
     if (!sweepable) {
         s.fail("parameter",
                "\"" + sweep.parameter +
-                       "\" is neither a method key a sweep can vary (eps, cube_draw) nor " +
+                       "\" is neither a method key a sweep can vary (eps, cube_draw, cube_anisotropy) nor " +
                        kBuildPrefix + "--FLAG");
         return sweep;
     }
@@ -223,6 +223,7 @@ Status runViews(const ViewsParams& p, const Scenario& scenario, const BenchOptio
              "selection",
              "eps",
              "cube_draw",
+             "cube_anisotropy",
              "sweep_parameter",
              "sweep_value",
              "width",
@@ -316,6 +317,7 @@ Status runViews(const ViewsParams& p, const Scenario& scenario, const BenchOptio
                              m.methodName(),
                              formatNumber(m.selection.epsilonPixels, 3),
                              m.cubeDrawName(),
+                             formatNumber(m.selection.maxCubeAnisotropy),
                              swept ? p.sweep.parameter : "",
                              setting ? sweepValueText(*setting) : buildText,
                              std::to_string(width),

@@ -86,9 +86,17 @@ Status setMethodKey(MethodSpec& method, const std::string& key, const nlohmann::
                     "cube_draw: expected \"faces\", \"points\" or \"auto\", got " + value.dump());
         return Status::ok();
     }
+    if (key == "cube_anisotropy") {
+        if (!value.is_number() || !(value.get<double>() >= 0.0 && value.get<double>() <= 1.0))
+            return Status(
+                    ErrorCode::InvalidArgument,
+                    "cube_anisotropy: expected a number in [0, 1] (1 accepts every cube), got " + value.dump());
+        method.selection.maxCubeAnisotropy = value.get<float>();
+        return Status::ok();
+    }
     return Status(
             ErrorCode::InvalidArgument,
-            "\"" + key + "\" is not a method key a sweep can vary (eps, cube_draw)");
+            "\"" + key + "\" is not a method key a sweep can vary (eps, cube_draw, cube_anisotropy)");
 }
 
 std::vector<MethodSpec> readMethods(ScenarioReader& reader) {

@@ -48,7 +48,7 @@ struct MethodSpec {
 };
 
 /** Method keys a sweep may vary (the others, label and method, name what is swept). */
-inline constexpr const char* kSweepableMethodKeys[] = {"eps", "cube_draw"};
+inline constexpr const char* kSweepableMethodKeys[] = {"eps", "cube_draw", "cube_anisotropy"};
 
 /** Reads "methods" (a non-empty array; labels unique); errors go to the reader. */
 std::vector<MethodSpec> readMethods(ScenarioReader& reader);
