@@ -26,9 +26,13 @@ namespace {
 using storage::NodeRecord;
 using storage::NodeRef;
 
-std::uint64_t nodeKey(NodeRef ref) { return (std::uint64_t{ref.page} << 32) | ref.slot; }
+std::uint64_t nodeKey(NodeRef ref) {
+    return (std::uint64_t{ref.page} << 32) | ref.slot;
+}
 
-bool isCell(const NodeRecord& node) { return node.kind == static_cast<std::uint8_t>(storage::NodeKind::Cell); }
+bool isCell(const NodeRecord& node) {
+    return node.kind == static_cast<std::uint8_t>(storage::NodeKind::Cell);
+}
 
 /** One reachable node as the walk meets it. */
 struct WalkedNode {
@@ -41,7 +45,8 @@ struct WalkedNode {
 // Every distinct node reachable from the header root (the instance level) and from each
 // prototype root, depth first, each once. Instance nodes are not followed into their prototype:
 // the prototype roots are walked on their own, so shared prototypes count once.
-Status walkNodes(const storage::SceneFile& scene, const std::function<Status(const WalkedNode&)>& visit) {
+Status
+walkNodes(const storage::SceneFile& scene, const std::function<Status(const WalkedNode&)>& visit) {
     std::unordered_set<std::uint64_t> seen;
     std::vector<WalkedNode> stack;
     auto push = [&](NodeRef ref, std::optional<NodeRef> parent, bool instanceLevel) -> Status {
@@ -57,7 +62,10 @@ Status walkNodes(const storage::SceneFile& scene, const std::function<Status(con
             stack.pop_back();
             FF_RETURN_IF_ERROR(visit(node));
             for (std::uint32_t c = 0; c < node.record.childCount; ++c)
-                FF_RETURN_IF_ERROR(push(storage::SceneFile::childRef(node.record, c), node.ref, node.instanceLevel));
+                FF_RETURN_IF_ERROR(
+                        push(storage::SceneFile::childRef(node.record, c),
+                             node.ref,
+                             node.instanceLevel));
         }
         return Status::ok();
     };
@@ -108,10 +116,14 @@ std::uint64_t bufferViewBytes(const nlohmann::json& gltf, std::uint64_t index) {
     if (views == gltf.end() || !views->is_array() || index >= views->size())
         return 0;
     const auto length = (*views)[index].find("byteLength");
-    return length != (*views)[index].end() && length->is_number_unsigned() ? length->get<std::uint64_t>() : 0;
+    return length != (*views)[index].end() && length->is_number_unsigned()
+                   ? length->get<std::uint64_t>()
+                   : 0;
 }
 
-bool isDataUri(const std::string& uri) { return uri.rfind("data:", 0) == 0; }
+bool isDataUri(const std::string& uri) {
+    return uri.rfind("data:", 0) == 0;
+}
 
 /** Counts what a generator passes to its sink, as an indexed mesh. */
 class IndexedMeshSink final : public builder::ISceneSink {
@@ -120,7 +132,9 @@ public:
         mVertices.emplace_back();
         return static_cast<builder::PrototypeId>(mVertices.size() - 1);
     }
-    Status addTriangles(builder::PrototypeId prototype, std::span<const storage::PackedTriangle> triangles) override {
+    Status addTriangles(
+            builder::PrototypeId prototype,
+            std::span<const storage::PackedTriangle> triangles) override {
         if (prototype >= mVertices.size())
             return Status(ErrorCode::InvalidArgument, "unknown prototype");
         for (const storage::PackedTriangle& t : triangles) {
@@ -180,8 +194,9 @@ double ratio(std::uint64_t a, std::uint64_t b) {
 } // namespace
 
 std::uint64_t SceneStats::representedBytes() const noexcept {
-    return headerBytes + nodeRecordBytes + triangleBytes + prototypeRecordBytes + instanceRecordBytes +
-           metadataBytes + trailerBytes + headerSlack + nodeSlack + geometrySlack + tableSlack + unreferencedBytes;
+    return headerBytes + nodeRecordBytes + triangleBytes + prototypeRecordBytes +
+           instanceRecordBytes + metadataBytes + trailerBytes + headerSlack + nodeSlack +
+           geometrySlack + tableSlack + unreferencedBytes;
 }
 
 Result<SceneStats> collectSceneStats(const storage::SceneFile& scene) {
@@ -211,7 +226,8 @@ Result<SceneStats> collectSceneStats(const storage::SceneFile& scene) {
         ++s.nodes;
         ++nodeSlots[n.ref.page];
         (n.instanceLevel ? s.instanceLevelNodes : s.prototypeNodes) += 1;
-        LevelStats& level = levelOf(n.instanceLevel ? s.instanceLevels : s.prototypeLevels, r.level);
+        LevelStats& level =
+                levelOf(n.instanceLevel ? s.instanceLevels : s.prototypeLevels, r.level);
         ++level.nodes;
         if (r.flags & storage::kNodeHasCube) {
             ++s.nodesWithCube;
@@ -260,12 +276,15 @@ Result<SceneStats> collectSceneStats(const storage::SceneFile& scene) {
     const std::uint64_t trianglesPerPage = storage::trianglesPerPage(pageSize);
     for (const auto& [page, used] : nodeSlots) {
         if (triangleSlots.contains(page) || isTable[page])
-            return Status(ErrorCode::Corrupt, "page " + std::to_string(page) + ": used both for nodes and for other data");
+            return Status(
+                    ErrorCode::Corrupt,
+                    "page " + std::to_string(page) + ": used both for nodes and for other data");
         s.sparseNodePages += 4 * used < nodesPerPage ? 1 : 0;
     }
     for (const auto& [page, used] : triangleSlots) {
         if (used > trianglesPerPage || isTable[page])
-            return Status(ErrorCode::Corrupt, "page " + std::to_string(page) + ": triangle runs overlap");
+            return Status(
+                    ErrorCode::Corrupt, "page " + std::to_string(page) + ": triangle runs overlap");
         s.sparseGeometryPages += 4 * used < trianglesPerPage ? 1 : 0;
     }
     s.nodePages = nodeSlots.size();
@@ -273,7 +292,8 @@ Result<SceneStats> collectSceneStats(const storage::SceneFile& scene) {
     s.unreferencedPages = s.pageCount - 1 - s.tablePages - s.nodePages - s.geometryPages;
 
     // Bytes by representation.
-    s.headerBytes = sizeof(storage::FileHeader) + scene.sections().size() * sizeof(storage::SectionEntry);
+    s.headerBytes =
+            sizeof(storage::FileHeader) + scene.sections().size() * sizeof(storage::SectionEntry);
     s.headerSlack = payload - s.headerBytes;
     s.nodeRecordBytes = s.nodes * sizeof(NodeRecord);
     s.cubeBytes = s.nodesWithCube * sizeof(NodeRecord::cube);
@@ -285,7 +305,8 @@ Result<SceneStats> collectSceneStats(const storage::SceneFile& scene) {
     return s;
 }
 
-Status measureCubeUsage(const storage::SceneFile& scene, const CubeUsageOptions& options, SceneStats& stats) {
+Status measureCubeUsage(
+        const storage::SceneFile& scene, const CubeUsageOptions& options, SceneStats& stats) {
     const runtime::Bounds bounds = sceneBounds(scene);
     runtime::MappedPageAccess pages(scene);
     runtime::Selection selection(scene, pages);
@@ -299,8 +320,9 @@ Status measureCubeUsage(const storage::SceneFile& scene, const CubeUsageOptions&
     generator.frames = options.framesPerPath;
     runtime::DrawList drawList;
     for (const std::string& kind : options.paths) {
-        Result<runtime::CameraPath> path = Status(ErrorCode::InvalidArgument, "unknown path kind " + kind +
-                                                                                     " (orbit, flythrough, teleports)");
+        Result<runtime::CameraPath> path =
+                Status(ErrorCode::InvalidArgument,
+                       "unknown path kind " + kind + " (orbit, flythrough, teleports)");
         if (kind == "orbit")
             path = runtime::makeOrbitPath(bounds, generator);
         else if (kind == "flythrough")
@@ -337,7 +359,8 @@ Status measureCubeUsage(const storage::SceneFile& scene, const CubeUsageOptions&
         ++usage.nodesWithCube;
         if (recorder.drawn.contains(nodeKey(n.ref))) {
             ++usage.nodesDrawn;
-            ++levelOf(n.instanceLevel ? stats.instanceLevels : stats.prototypeLevels, r.level).cubesDrawn;
+            ++levelOf(n.instanceLevel ? stats.instanceLevels : stats.prototypeLevels, r.level)
+                      .cubesDrawn;
             return Status::ok();
         }
         ++usage.neverDrawn;
@@ -369,7 +392,9 @@ Result<InputSize> measureGltfInput(const std::filesystem::path& file) {
             return Status(ErrorCode::InvalidArgument, file.string() + ": not a GLB file");
         const std::uint32_t jsonLength = readU32(head, 12);
         if (jsonLength > size - 20)
-            return Status(ErrorCode::InvalidArgument, file.string() + ": GLB JSON chunk runs past the file");
+            return Status(
+                    ErrorCode::InvalidArgument,
+                    file.string() + ": GLB JSON chunk runs past the file");
         FF_ASSIGN_OR_RETURN(const std::string all, readText(file, 20 + std::uint64_t{jsonLength}));
         gltf = nlohmann::json::parse(all.substr(20), nullptr, false);
     } else {
@@ -394,9 +419,11 @@ Result<InputSize> measureGltfInput(const std::filesystem::path& file) {
         for (const nlohmann::json& image : *images) {
             const auto uri = image.find("uri");
             if (uri != image.end() && uri->is_string() && !isDataUri(uri->get<std::string>())) {
-                FF_ASSIGN_OR_RETURN(const std::uint64_t bytes, fileSize(dir / uri->get<std::string>()));
+                FF_ASSIGN_OR_RETURN(
+                        const std::uint64_t bytes, fileSize(dir / uri->get<std::string>()));
                 input.imageBytes += bytes;
-            } else if (const auto view = image.find("bufferView"); view != image.end() && view->is_number_unsigned()) {
+            } else if (const auto view = image.find("bufferView");
+                       view != image.end() && view->is_number_unsigned()) {
                 embeddedImages += bufferViewBytes(gltf, view->get<std::uint64_t>());
             }
         }
@@ -405,7 +432,8 @@ Result<InputSize> measureGltfInput(const std::filesystem::path& file) {
     embeddedImages = std::min(embeddedImages, input.bytes);
     input.bytes -= embeddedImages;
     input.imageBytes += embeddedImages;
-    input.what = binary ? "glb file less embedded images" : "gltf JSON + external buffers (images apart)";
+    input.what = binary ? "glb file less embedded images"
+                        : "gltf JSON + external buffers (images apart)";
     return input;
 }
 
@@ -416,7 +444,8 @@ Result<InputSize> measureGeneratorInput(const std::string& spec) {
     (void)report;
     InputSize input;
     input.bytes = sink.bytes();
-    input.what = "indexed mesh: 20 B per distinct vertex + 12 B per triangle per prototype, 48 B per instance";
+    input.what = "indexed mesh: 20 B per distinct vertex + 12 B per triangle per prototype, 48 B "
+                 "per instance";
     return input;
 }
 
@@ -428,7 +457,10 @@ nlohmann::json SceneStats::toJson() const {
     out["page_size"] = pageSize;
     out["pages"] = pageCount;
     if (input) {
-        out["input"] = {{"bytes", input->bytes}, {"image_bytes", input->imageBytes}, {"counted", input->what}};
+        out["input"] = {
+                {"bytes", input->bytes},
+                {"image_bytes", input->imageBytes},
+                {"counted", input->what}};
         out["file_per_input_byte"] = ratio(fileBytes, input->bytes);
     } else {
         out["input"] = nullptr;
@@ -472,7 +504,9 @@ nlohmann::json SceneStats::toJson() const {
     out["page_fill"] = {
             {"nodes", ratio(nodeRecordBytes, nodePages * payload)},
             {"geometry", ratio(triangleBytes, geometryPages * payload)},
-            {"table", ratio(prototypeRecordBytes + instanceRecordBytes + metadataBytes, tablePages * payload)},
+            {"table",
+             ratio(prototypeRecordBytes + instanceRecordBytes + metadataBytes,
+                   tablePages * payload)},
     };
     out["bytes"] = {
             {"header", headerBytes},

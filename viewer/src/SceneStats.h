@@ -46,10 +46,10 @@ struct CubeUsage {
     float epsilonPixels = 1.0f;
     int width = 640;
     int height = 480;
-    std::uint64_t cubeDraws = 0;    ///< cubes drawn, summed over all frames
+    std::uint64_t cubeDraws = 0; ///< cubes drawn, summed over all frames
     std::uint64_t nodesWithCube = 0;
-    std::uint64_t nodesDrawn = 0;   ///< distinct nodes whose cube was drawn at least once
-    std::uint64_t neverDrawn = 0;   ///< nodesWithCube - nodesDrawn
+    std::uint64_t nodesDrawn = 0;      ///< distinct nodes whose cube was drawn at least once
+    std::uint64_t neverDrawn = 0;      ///< nodesWithCube - nodesDrawn
     std::uint64_t neverDrawnBytes = 0; ///< their cube bytes (24 each)
     std::uint64_t neverDrawnInstance = 0;
     std::uint64_t neverDrawnInner = 0; ///< cells with children
@@ -71,13 +71,13 @@ struct SceneStats {
     std::uint64_t headerNodeCount = 0; ///< FileHeader::nodeCount
     std::uint64_t instanceLevelNodes = 0;
     std::uint64_t prototypeNodes = 0;
-    std::uint64_t instanceNodes = 0;   ///< kind Instance
-    std::uint64_t innerCells = 0;      ///< Cell with children
-    std::uint64_t leafCells = 0;       ///< Cell without children
+    std::uint64_t instanceNodes = 0;           ///< kind Instance
+    std::uint64_t innerCells = 0;              ///< Cell with children
+    std::uint64_t leafCells = 0;               ///< Cell without children
     std::uint64_t innerCellsWithTriangles = 0; ///< inner cells holding large triangles
     std::uint64_t singleChildCells = 0; ///< inner cells with one child and no triangles (chains)
-    std::uint64_t emptyLeaves = 0;     ///< leaves without triangles
-    std::uint64_t smallLeaves = 0;     ///< leaves with 1..7 triangles
+    std::uint64_t emptyLeaves = 0;      ///< leaves without triangles
+    std::uint64_t smallLeaves = 0;      ///< leaves with 1..7 triangles
     std::uint64_t nodesWithCube = 0;
     std::uint64_t maxChildren = 0;
     std::vector<LevelStats> prototypeLevels; ///< index = NodeRecord::level
@@ -93,24 +93,24 @@ struct SceneStats {
     std::uint64_t nodePages = 0;
     std::uint64_t geometryPages = 0;
     std::uint64_t tablePages = 0;
-    std::uint64_t unreferencedPages = 0; ///< Nodes/Geometry pages nothing reachable uses
+    std::uint64_t unreferencedPages = 0;   ///< Nodes/Geometry pages nothing reachable uses
     std::uint64_t sparseNodePages = 0;     ///< Nodes pages less than a quarter full
     std::uint64_t sparseGeometryPages = 0; ///< Geometry pages less than a quarter full
 
     // Bytes by representation (sum = fileBytes).
-    std::uint64_t headerBytes = 0;         ///< FileHeader + section table
-    std::uint64_t nodeRecordBytes = 0;     ///< 96 per node, cubes included
-    std::uint64_t cubeBytes = 0;           ///< 24 per node with a cube (part of nodeRecordBytes)
-    std::uint64_t triangleBytes = 0;       ///< 60 per stored triangle
+    std::uint64_t headerBytes = 0;     ///< FileHeader + section table
+    std::uint64_t nodeRecordBytes = 0; ///< 96 per node, cubes included
+    std::uint64_t cubeBytes = 0;       ///< 24 per node with a cube (part of nodeRecordBytes)
+    std::uint64_t triangleBytes = 0;   ///< 60 per stored triangle
     std::uint64_t prototypeRecordBytes = 0;
     std::uint64_t instanceRecordBytes = 0; ///< the instance transforms
     std::uint64_t metadataBytes = 0;
-    std::uint64_t trailerBytes = 0;        ///< 16 per page
-    std::uint64_t headerSlack = 0;         ///< unused payload of page 0
-    std::uint64_t nodeSlack = 0;           ///< unused slots and tail bytes of Nodes pages
-    std::uint64_t geometrySlack = 0;       ///< same for Geometry pages
-    std::uint64_t tableSlack = 0;          ///< tail of the last page of each table section
-    std::uint64_t unreferencedBytes = 0;   ///< payload of unreferenced pages
+    std::uint64_t trailerBytes = 0;      ///< 16 per page
+    std::uint64_t headerSlack = 0;       ///< unused payload of page 0
+    std::uint64_t nodeSlack = 0;         ///< unused slots and tail bytes of Nodes pages
+    std::uint64_t geometrySlack = 0;     ///< same for Geometry pages
+    std::uint64_t tableSlack = 0;        ///< tail of the last page of each table section
+    std::uint64_t unreferencedBytes = 0; ///< payload of unreferenced pages
 
     std::optional<InputSize> input;
     std::optional<CubeUsage> cubes;

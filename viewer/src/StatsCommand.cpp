@@ -17,8 +17,8 @@ namespace {
 
 struct StatsArgs {
     std::string scene;
-    std::string json;   ///< file to write, "-" = stdout
-    std::string input;  ///< glTF file or generator spec to compare against
+    std::string json;  ///< file to write, "-" = stdout
+    std::string input; ///< glTF file or generator spec to compare against
     std::uint64_t inputBytes = 0;
     CLI::Option* inputBytesOption = nullptr;
     bool paths = false;
@@ -58,27 +58,51 @@ double percent(std::uint64_t part, std::uint64_t whole) {
 }
 
 void printText(const SceneStats& s) {
-    std::printf("%s: %s in %llu pages of %s", s.path.c_str(), formatBytes(s.fileBytes).c_str(),
-                static_cast<unsigned long long>(s.pageCount), formatBytes(s.pageSize).c_str());
+    std::printf(
+            "%s: %s in %llu pages of %s",
+            s.path.c_str(),
+            formatBytes(s.fileBytes).c_str(),
+            static_cast<unsigned long long>(s.pageCount),
+            formatBytes(s.pageSize).c_str());
     if (s.input)
-        std::printf(", %.3gx the input (%s: %s)", static_cast<double>(s.fileBytes) / static_cast<double>(std::max<std::uint64_t>(s.input->bytes, 1)),
-                    s.input->what.c_str(), formatBytes(s.input->bytes).c_str());
+        std::printf(
+                ", %.3gx the input (%s: %s)",
+                static_cast<double>(s.fileBytes) /
+                        static_cast<double>(std::max<std::uint64_t>(s.input->bytes, 1)),
+                s.input->what.c_str(),
+                formatBytes(s.input->bytes).c_str());
     std::printf("\n");
-    std::printf("nodes      %llu (%llu instance level, %llu in prototypes): %llu instance, %llu inner cells, "
-                "%llu leaves (%llu empty, %llu with < 8 triangles); %.4f nodes per stored triangle\n",
-                static_cast<unsigned long long>(s.nodes), static_cast<unsigned long long>(s.instanceLevelNodes),
-                static_cast<unsigned long long>(s.prototypeNodes), static_cast<unsigned long long>(s.instanceNodes),
-                static_cast<unsigned long long>(s.innerCells), static_cast<unsigned long long>(s.leafCells),
-                static_cast<unsigned long long>(s.emptyLeaves), static_cast<unsigned long long>(s.smallLeaves),
-                s.storedTriangles ? static_cast<double>(s.nodes) / static_cast<double>(s.storedTriangles) : 0.0);
-    std::printf("triangles  %llu stored, %llu instanced; %llu prototypes, %llu instances\n",
-                static_cast<unsigned long long>(s.storedTriangles), static_cast<unsigned long long>(s.instancedTriangles),
-                static_cast<unsigned long long>(s.prototypes), static_cast<unsigned long long>(s.instances));
-    std::printf("pages      1 header, %llu nodes (%llu under 1/4 full), %llu geometry (%llu under 1/4 full), "
-                "%llu table, %llu unreferenced\n",
-                static_cast<unsigned long long>(s.nodePages), static_cast<unsigned long long>(s.sparseNodePages),
-                static_cast<unsigned long long>(s.geometryPages), static_cast<unsigned long long>(s.sparseGeometryPages),
-                static_cast<unsigned long long>(s.tablePages), static_cast<unsigned long long>(s.unreferencedPages));
+    std::printf(
+            "nodes      %llu (%llu instance level, %llu in prototypes): %llu instance, %llu inner "
+            "cells, "
+            "%llu leaves (%llu empty, %llu with < 8 triangles); %.4f nodes per stored triangle\n",
+            static_cast<unsigned long long>(s.nodes),
+            static_cast<unsigned long long>(s.instanceLevelNodes),
+            static_cast<unsigned long long>(s.prototypeNodes),
+            static_cast<unsigned long long>(s.instanceNodes),
+            static_cast<unsigned long long>(s.innerCells),
+            static_cast<unsigned long long>(s.leafCells),
+            static_cast<unsigned long long>(s.emptyLeaves),
+            static_cast<unsigned long long>(s.smallLeaves),
+            s.storedTriangles
+                    ? static_cast<double>(s.nodes) / static_cast<double>(s.storedTriangles)
+                    : 0.0);
+    std::printf(
+            "triangles  %llu stored, %llu instanced; %llu prototypes, %llu instances\n",
+            static_cast<unsigned long long>(s.storedTriangles),
+            static_cast<unsigned long long>(s.instancedTriangles),
+            static_cast<unsigned long long>(s.prototypes),
+            static_cast<unsigned long long>(s.instances));
+    std::printf(
+            "pages      1 header, %llu nodes (%llu under 1/4 full), %llu geometry (%llu under 1/4 "
+            "full), "
+            "%llu table, %llu unreferenced\n",
+            static_cast<unsigned long long>(s.nodePages),
+            static_cast<unsigned long long>(s.sparseNodePages),
+            static_cast<unsigned long long>(s.geometryPages),
+            static_cast<unsigned long long>(s.sparseGeometryPages),
+            static_cast<unsigned long long>(s.tablePages),
+            static_cast<unsigned long long>(s.unreferencedPages));
     const struct {
         const char* name;
         std::uint64_t bytes;
@@ -98,17 +122,29 @@ void printText(const SceneStats& s) {
             {"unreferenced pages", s.unreferencedBytes},
     };
     for (const auto& row : rows)
-        std::printf("  %-22s %12llu B %6.2f%%\n", row.name, static_cast<unsigned long long>(row.bytes),
-                    percent(row.bytes, s.fileBytes));
+        std::printf(
+                "  %-22s %12llu B %6.2f%%\n",
+                row.name,
+                static_cast<unsigned long long>(row.bytes),
+                percent(row.bytes, s.fileBytes));
     if (s.cubes) {
         const CubeUsage& c = *s.cubes;
-        std::printf("cubes      %llu of %llu nodes with a cube drawn at least once over %zu paths x %lld frames "
-                    "(%dx%d, eps %g); %llu never drawn (%s: %llu instance, %llu inner, %llu leaf)\n",
-                    static_cast<unsigned long long>(c.nodesDrawn), static_cast<unsigned long long>(c.nodesWithCube),
-                    c.paths.size(), static_cast<long long>(c.framesPerPath), c.width, c.height,
-                    static_cast<double>(c.epsilonPixels), static_cast<unsigned long long>(c.neverDrawn),
-                    formatBytes(c.neverDrawnBytes).c_str(), static_cast<unsigned long long>(c.neverDrawnInstance),
-                    static_cast<unsigned long long>(c.neverDrawnInner), static_cast<unsigned long long>(c.neverDrawnLeaf));
+        std::printf(
+                "cubes      %llu of %llu nodes with a cube drawn at least once over %zu paths x "
+                "%lld frames "
+                "(%dx%d, eps %g); %llu never drawn (%s: %llu instance, %llu inner, %llu leaf)\n",
+                static_cast<unsigned long long>(c.nodesDrawn),
+                static_cast<unsigned long long>(c.nodesWithCube),
+                c.paths.size(),
+                static_cast<long long>(c.framesPerPath),
+                c.width,
+                c.height,
+                static_cast<double>(c.epsilonPixels),
+                static_cast<unsigned long long>(c.neverDrawn),
+                formatBytes(c.neverDrawnBytes).c_str(),
+                static_cast<unsigned long long>(c.neverDrawnInstance),
+                static_cast<unsigned long long>(c.neverDrawnInner),
+                static_cast<unsigned long long>(c.neverDrawnLeaf));
     }
 }
 
@@ -157,23 +193,38 @@ CommandRunner addStatsCommand(CLI::App& app) {
     auto args = std::make_shared<StatsArgs>();
     CLI::App* cmd = app.add_subcommand(
             "stats",
-            "What a scene file holds: bytes per representation against the input, nodes per triangle, "
+            "What a scene file holds: bytes per representation against the input, nodes per "
+            "triangle, "
             "page fill; with --paths, which color cubes the standard camera paths draw");
     cmd->add_option("scene", args->scene, "Scene file (.ffs)")->required();
-    cmd->add_option("--json", args->json, "Also write the statistics as JSON to this file ('-': JSON on stdout only)");
-    CLI::Option* inputOption = cmd->add_option("--input", args->input,
-                    "Input to compare with: a .gltf/.glb file or a generator spec (default: the scene's "
-                    "recorded source, if it can be found)");
-    args->inputBytesOption = cmd->add_option("--input-bytes", args->inputBytes, "Input size in bytes, given directly");
-    cmd->add_flag("--paths", args->paths,
-                  "Select (no drawing, every page resident) along camera paths fitted to the scene and count "
-                  "the nodes whose cube was drawn");
-    cmd->add_option("--path-kinds", args->pathKinds, "Paths for --paths: orbit, flythrough, teleports")
+    cmd->add_option(
+            "--json",
+            args->json,
+            "Also write the statistics as JSON to this file ('-': JSON on stdout only)");
+    CLI::Option* inputOption = cmd->add_option(
+            "--input",
+            args->input,
+            "Input to compare with: a .gltf/.glb file or a generator spec (default: the scene's "
+            "recorded source, if it can be found)");
+    args->inputBytesOption = cmd->add_option(
+            "--input-bytes", args->inputBytes, "Input size in bytes, given directly");
+    cmd->add_flag(
+            "--paths",
+            args->paths,
+            "Select (no drawing, every page resident) along camera paths fitted to the scene and "
+            "count "
+            "the nodes whose cube was drawn");
+    cmd->add_option(
+               "--path-kinds", args->pathKinds, "Paths for --paths: orbit, flythrough, teleports")
             ->check(CLI::IsMember({"orbit", "flythrough", "teleports"}))
             ->capture_default_str();
-    cmd->add_option("--frames", args->frames, "Frames per path for --paths")->check(CLI::Range(1, 100000))->capture_default_str();
-    cmd->add_option("--epsilon", args->epsilon, "Pixel threshold of the cube rule for --paths")->capture_default_str();
-    cmd->add_option("--size", args->size, "Viewport WIDTHxHEIGHT for --paths")->capture_default_str();
+    cmd->add_option("--frames", args->frames, "Frames per path for --paths")
+            ->check(CLI::Range(1, 100000))
+            ->capture_default_str();
+    cmd->add_option("--epsilon", args->epsilon, "Pixel threshold of the cube rule for --paths")
+            ->capture_default_str();
+    cmd->add_option("--size", args->size, "Viewport WIDTHxHEIGHT for --paths")
+            ->capture_default_str();
     inputOption->excludes(args->inputBytesOption);
     return [args]() { return runStats(*args); };
 }
