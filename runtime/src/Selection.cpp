@@ -138,7 +138,7 @@ Status Selection::select(const Camera& camera, const SelectionOptions& options, 
     } else {
         storage::NodeRecord root{};
         if (readNode(mScene.header().root, kTopPriority, root) == Fetch::Ready)
-            visit(root, 0, 0);
+            visit(root, mScene.header().root, 0, 0);
         else if (!mNewFailures.empty())
             return mNewFailures.front().withContext("the root node is unreadable");
     }
@@ -148,13 +148,13 @@ Status Selection::select(const Camera& camera, const SelectionOptions& options, 
     return Status::ok();
 }
 
-void Selection::defer(const storage::NodeRecord& node, std::uint32_t transform) {
+void Selection::defer(const storage::NodeRecord& node, storage::NodeRef ref, std::uint32_t transform) {
     ++mStats->nodesDeferred;
     if (node.flags & storage::kNodeHasCube)
-        emitCube(node, transform);
+        emitCube(node, ref, transform);
 }
 
-void Selection::visit(const storage::NodeRecord& node, std::uint32_t transform, int depth) {
+void Selection::visit(const storage::NodeRecord& node, storage::NodeRef ref, std::uint32_t transform, int depth) {
     if (depth > kMaxNesting) {
         reportFailure(Status(ErrorCode::Corrupt, "node nesting deeper than " + std::to_string(kMaxNesting) +
                                                          " levels: the hierarchy has a reference cycle"));
@@ -180,20 +180,21 @@ void Selection::visit(const storage::NodeRecord& node, std::uint32_t transform, 
         projected = 2.0f * radius * mPixelScale / (distance - radius);
     if (projected < mOptions.epsilonPixels && (node.flags & storage::kNodeHasCube) &&
         !(refinable(node) && cubeAnisotropy(node) > mOptions.maxCubeAnisotropy)) {
-        emitCube(node, transform);
+        emitCube(node, ref, transform);
         return;
     }
     const float priority = std::min(projected, kTopPriority) * mOptions.priorityScale;
 
     if (!isCell(node)) {
         const storage::InstanceRecord& instance = mScene.instances()[node.geometryPage];
+        const storage::NodeRef rootRef = mScene.prototypes()[instance.prototype].root;
         storage::NodeRecord root{};
-        if (readNode(mScene.prototypes()[instance.prototype].root, priority, root) != Fetch::Ready) {
-            defer(node, transform);
+        if (readNode(rootRef, priority, root) != Fetch::Ready) {
+            defer(node, ref, transform);
             return;
         }
         ++mStats->instancesEntered;
-        visit(root, pushTransform(mOut->transforms[transform] * instanceTransform(instance)), depth + 1);
+        visit(root, rootRef, pushTransform(mOut->transforms[transform] * instanceTransform(instance)), depth + 1);
         return;
     }
 
@@ -204,7 +205,7 @@ void Selection::visit(const storage::NodeRecord& node, std::uint32_t transform, 
                                fetch(node.firstChild.page, storage::PageType::Nodes, priority, childPage) == Fetch::Ready;
     const bool geometryReady = collectGeometry(node, priority) == Fetch::Ready;
     if (!childrenReady || !geometryReady) {
-        defer(node, transform);
+        defer(node, ref, transform);
         return;
     }
     for (const storage::GeometrySegment& s : mSegments) {
@@ -215,21 +216,22 @@ void Selection::visit(const storage::NodeRecord& node, std::uint32_t transform, 
     // Children farthest first, so cubes drawn later blend over what lies behind them.
     const std::size_t base = mChildStack.size();
     for (std::uint32_t c = 0; c < node.childCount; ++c) {
-        Result<storage::NodeRecord> child = mScene.decodeNode(childPage, storage::SceneFile::childRef(node, c));
+        const storage::NodeRef childRef = storage::SceneFile::childRef(node, c);
+        Result<storage::NodeRecord> child = mScene.decodeNode(childPage, childRef);
         if (!child) {
             reportFailure(child.status());
             mChildStack.resize(base);
-            defer(node, transform);
+            defer(node, ref, transform);
             return;
         }
         const glm::vec3 d = 0.5f * (toVec3(child->cellMin) + toVec3(child->cellMax)) - localEye;
-        mChildStack.push_back({*child, glm::dot(d, d)});
+        mChildStack.push_back({*child, childRef, glm::dot(d, d)});
     }
     std::sort(mChildStack.begin() + static_cast<std::ptrdiff_t>(base), mChildStack.end(),
               [](const ChildEntry& a, const ChildEntry& b) { return a.distance > b.distance; });
     for (std::size_t i = base; i < base + node.childCount; ++i) {
-        const storage::NodeRecord child = mChildStack[i].record; // the stack may grow below
-        visit(child, transform, depth + 1);
+        const ChildEntry child = mChildStack[i]; // the stack may grow below
+        visit(child.record, child.ref, transform, depth + 1);
     }
     mChildStack.resize(base);
 }
@@ -260,7 +262,9 @@ void Selection::mergeGeometryDraws() {
     mStats->geometryDraws = out;
 }
 
-void Selection::emitCube(const storage::NodeRecord& node, std::uint32_t transform) {
+void Selection::emitCube(const storage::NodeRecord& node, storage::NodeRef ref, std::uint32_t transform) {
+    if (mOptions.observer)
+        mOptions.observer->cubeDrawn(ref, node);
     const glm::vec3 boxMin = toVec3(node.cellMin);
     const glm::vec3 boxMax = toVec3(node.cellMax);
     mOut->cubes.push_back({boxMin, boxMax, transform, node.cube});

@@ -23,6 +23,7 @@ int runCli(int argc, char** argv) {
             {"replay", addReplayCommand(app)},
             {"path", addPathCommand(app)},
             {"view", addViewCommand(app)},
+            {"stats", addStatsCommand(app)},
     };
     try {
         app.parse(argc, argv);

@@ -19,6 +19,7 @@ CommandRunner addBenchCommand(CLI::App& app);
 CommandRunner addReplayCommand(CLI::App& app);
 CommandRunner addPathCommand(CLI::App& app);
 CommandRunner addViewCommand(CLI::App& app);
+CommandRunner addStatsCommand(CLI::App& app);
 
 /** Prints "farfield <verb>: <message>" to stderr; returns the exit code for the error. */
 int reportError(const char* verb, const ff::Status& status);

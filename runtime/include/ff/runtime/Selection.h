@@ -27,6 +27,19 @@ enum class CubeStyle {
     Auto,   ///< points when ε <= 2 pixels (every drawn cube is then sub-pixel), else faces
 };
 
+/**
+ * Told of what selection draws, for analysis tools (`farfield stats --paths`) and tests. Optional:
+ * with no observer set, selection pays one null check per drawn cube and nothing else.
+ * Called on the thread that runs select(), during select().
+ */
+class ISelectionObserver {
+public:
+    virtual ~ISelectionObserver() = default;
+    /** `node` (stored at `ref`) is drawn as its color cube this frame. A prototype node drawn
+     *  under several instances is reported once per instance. */
+    virtual void cubeDrawn(storage::NodeRef ref, const storage::NodeRecord& node) = 0;
+};
+
 struct SelectionOptions {
     Method method = Method::Hierarchical;
     /** A cell whose projected size is below this many pixels is drawn as its color cube;
@@ -43,6 +56,8 @@ struct SelectionOptions {
     float priorityScale = 1.0f;
     float viewportWidth = 640.0f;
     float viewportHeight = 480.0f;
+    /** If set, told of every drawn cube (borrowed; must outlive the select() calls). */
+    ISelectionObserver* observer = nullptr;
 };
 
 /**
@@ -73,19 +88,20 @@ public:
 private:
     struct ChildEntry {
         storage::NodeRecord record;
+        storage::NodeRef ref;
         float distance;
     };
 
     enum class Fetch { Ready, Missing };
 
-    void visit(const storage::NodeRecord& node, std::uint32_t transform, int depth);
+    void visit(const storage::NodeRecord& node, storage::NodeRef ref, std::uint32_t transform, int depth);
     /** Looks a page up; Failed pages are reported once and read as Missing. */
     Fetch fetch(std::uint64_t page, storage::PageType type, float priority, std::span<const std::byte>& payload);
     Fetch readNode(storage::NodeRef ref, float priority, storage::NodeRecord& out);
     /** Appends the node's own geometry runs to mSegments if every page is Ready. */
     Fetch collectGeometry(const storage::NodeRecord& node, float priority);
-    void emitCube(const storage::NodeRecord& node, std::uint32_t transform);
-    void defer(const storage::NodeRecord& node, std::uint32_t transform);
+    void emitCube(const storage::NodeRecord& node, storage::NodeRef ref, std::uint32_t transform);
+    void defer(const storage::NodeRecord& node, storage::NodeRef ref, std::uint32_t transform);
     std::uint32_t pushTransform(const glm::mat4& transform);
     void selectFull();
     void mergeGeometryDraws();

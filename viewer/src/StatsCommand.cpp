@@ -1,0 +1,232 @@
+#include "Commands.h"
+#include "SceneStats.h"
+#include "Units.h"
+
+#include <ff/storage/SceneFile.h>
+
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <memory>
+#include <string>
+#include <vector>
+
+namespace ff::viewer {
+
+namespace {
+
+struct StatsArgs {
+    std::string scene;
+    std::string json;  ///< file to write, "-" = stdout
+    std::string input; ///< glTF file or generator spec to compare against
+    std::uint64_t inputBytes = 0;
+    CLI::Option* inputBytesOption = nullptr;
+    bool paths = false;
+    std::vector<std::string> pathKinds = {"orbit", "flythrough"};
+    std::int64_t frames = 60;
+    float epsilon = 1.0f;
+    std::string size = "640x480";
+};
+
+// The input to compare with: --input-bytes, else --input, else the scene's own "source" (a glTF
+// path as given to build, or generate:SPEC). A source that cannot be found leaves it unknown.
+Result<std::optional<InputSize>> resolveInput(const StatsArgs& args, const SceneStats& stats) {
+    if (args.inputBytesOption->count() > 0) {
+        InputSize input;
+        input.bytes = args.inputBytes;
+        input.what = "given with --input-bytes";
+        return std::optional<InputSize>(input);
+    }
+    std::string source = args.input.empty() ? stats.source : args.input;
+    if (source.rfind("generate:", 0) == 0)
+        source = source.substr(9);
+    if (source.empty())
+        return std::optional<InputSize>();
+    const std::string ext = std::filesystem::path(source).extension().string();
+    if (ext == ".gltf" || ext == ".glb") {
+        if (args.input.empty() && !std::filesystem::exists(source))
+            return std::optional<InputSize>(); // built elsewhere: not an error
+        FF_ASSIGN_OR_RETURN(const InputSize input, measureGltfInput(source));
+        return std::optional<InputSize>(input);
+    }
+    FF_ASSIGN_OR_RETURN(const InputSize input, measureGeneratorInput(source));
+    return std::optional<InputSize>(input);
+}
+
+double percent(std::uint64_t part, std::uint64_t whole) {
+    return whole == 0 ? 0.0 : 100.0 * static_cast<double>(part) / static_cast<double>(whole);
+}
+
+void printText(const SceneStats& s) {
+    std::printf(
+            "%s: %s in %llu pages of %s",
+            s.path.c_str(),
+            formatBytes(s.fileBytes).c_str(),
+            static_cast<unsigned long long>(s.pageCount),
+            formatBytes(s.pageSize).c_str());
+    if (s.input)
+        std::printf(
+                ", %.3gx the input (%s: %s)",
+                static_cast<double>(s.fileBytes) /
+                        static_cast<double>(std::max<std::uint64_t>(s.input->bytes, 1)),
+                s.input->what.c_str(),
+                formatBytes(s.input->bytes).c_str());
+    std::printf("\n");
+    std::printf(
+            "nodes      %llu (%llu instance level, %llu in prototypes): %llu instance, %llu inner "
+            "cells, "
+            "%llu leaves (%llu empty, %llu with < 8 triangles); %.4f nodes per stored triangle\n",
+            static_cast<unsigned long long>(s.nodes),
+            static_cast<unsigned long long>(s.instanceLevelNodes),
+            static_cast<unsigned long long>(s.prototypeNodes),
+            static_cast<unsigned long long>(s.instanceNodes),
+            static_cast<unsigned long long>(s.innerCells),
+            static_cast<unsigned long long>(s.leafCells),
+            static_cast<unsigned long long>(s.emptyLeaves),
+            static_cast<unsigned long long>(s.smallLeaves),
+            s.storedTriangles
+                    ? static_cast<double>(s.nodes) / static_cast<double>(s.storedTriangles)
+                    : 0.0);
+    std::printf(
+            "triangles  %llu stored, %llu instanced; %llu prototypes, %llu instances\n",
+            static_cast<unsigned long long>(s.storedTriangles),
+            static_cast<unsigned long long>(s.instancedTriangles),
+            static_cast<unsigned long long>(s.prototypes),
+            static_cast<unsigned long long>(s.instances));
+    std::printf(
+            "pages      1 header, %llu nodes (%llu under 1/4 full), %llu geometry (%llu under 1/4 "
+            "full), "
+            "%llu table, %llu unreferenced\n",
+            static_cast<unsigned long long>(s.nodePages),
+            static_cast<unsigned long long>(s.sparseNodePages),
+            static_cast<unsigned long long>(s.geometryPages),
+            static_cast<unsigned long long>(s.sparseGeometryPages),
+            static_cast<unsigned long long>(s.tablePages),
+            static_cast<unsigned long long>(s.unreferencedPages));
+    const struct {
+        const char* name;
+        std::uint64_t bytes;
+    } rows[] = {
+            {"node records", s.nodeRecordBytes},
+            {"  of which cubes", s.cubeBytes},
+            {"triangles", s.triangleBytes},
+            {"instance transforms", s.instanceRecordBytes},
+            {"prototype records", s.prototypeRecordBytes},
+            {"metadata", s.metadataBytes},
+            {"header + sections", s.headerBytes},
+            {"page trailers", s.trailerBytes},
+            {"slack: header page", s.headerSlack},
+            {"slack: nodes pages", s.nodeSlack},
+            {"slack: geometry pages", s.geometrySlack},
+            {"slack: table pages", s.tableSlack},
+            {"unreferenced pages", s.unreferencedBytes},
+    };
+    for (const auto& row : rows)
+        std::printf(
+                "  %-22s %12llu B %6.2f%%\n",
+                row.name,
+                static_cast<unsigned long long>(row.bytes),
+                percent(row.bytes, s.fileBytes));
+    if (s.cubes) {
+        const CubeUsage& c = *s.cubes;
+        std::printf(
+                "cubes      %llu of %llu nodes with a cube drawn at least once over %zu paths x "
+                "%lld frames "
+                "(%dx%d, eps %g); %llu never drawn (%s: %llu instance, %llu inner, %llu leaf)\n",
+                static_cast<unsigned long long>(c.nodesDrawn),
+                static_cast<unsigned long long>(c.nodesWithCube),
+                c.paths.size(),
+                static_cast<long long>(c.framesPerPath),
+                c.width,
+                c.height,
+                static_cast<double>(c.epsilonPixels),
+                static_cast<unsigned long long>(c.neverDrawn),
+                formatBytes(c.neverDrawnBytes).c_str(),
+                static_cast<unsigned long long>(c.neverDrawnInstance),
+                static_cast<unsigned long long>(c.neverDrawnInner),
+                static_cast<unsigned long long>(c.neverDrawnLeaf));
+    }
+}
+
+int runStats(const StatsArgs& args) {
+    auto scene = storage::SceneFile::open(args.scene);
+    if (!scene)
+        return reportError("stats", scene.status().withContext(args.scene));
+    Result<SceneStats> stats = collectSceneStats(**scene);
+    if (!stats)
+        return reportError("stats", stats.status().withContext(args.scene));
+    Result<std::optional<InputSize>> input = resolveInput(args, *stats);
+    if (!input)
+        return reportError("stats", input.status().withContext("--input"));
+    stats->input = *input;
+    if (args.paths) {
+        auto size = parseImageSize(args.size);
+        if (!size)
+            return reportError("stats", size.status().withContext("--size"));
+        CubeUsageOptions options;
+        options.paths = args.pathKinds;
+        options.framesPerPath = args.frames;
+        options.epsilonPixels = args.epsilon;
+        options.width = size->x;
+        options.height = size->y;
+        if (Status status = measureCubeUsage(**scene, options, *stats); !status)
+            return reportError("stats", status.withContext(args.scene));
+    }
+    if (args.json == "-") {
+        std::printf("%s\n", stats->toJson().dump(2).c_str());
+        return 0;
+    }
+    printText(*stats);
+    if (!args.json.empty()) {
+        std::ofstream file(args.json, std::ios::binary | std::ios::trunc);
+        file << stats->toJson().dump(2) << "\n";
+        file.close();
+        if (!file)
+            return reportError("stats", Status(ErrorCode::IoError, "cannot write " + args.json));
+    }
+    return 0;
+}
+
+} // namespace
+
+CommandRunner addStatsCommand(CLI::App& app) {
+    auto args = std::make_shared<StatsArgs>();
+    CLI::App* cmd = app.add_subcommand(
+            "stats",
+            "What a scene file holds: bytes per representation against the input, nodes per "
+            "triangle, "
+            "page fill; with --paths, which color cubes the standard camera paths draw");
+    cmd->add_option("scene", args->scene, "Scene file (.ffs)")->required();
+    cmd->add_option(
+            "--json",
+            args->json,
+            "Also write the statistics as JSON to this file ('-': JSON on stdout only)");
+    CLI::Option* inputOption = cmd->add_option(
+            "--input",
+            args->input,
+            "Input to compare with: a .gltf/.glb file or a generator spec (default: the scene's "
+            "recorded source, if it can be found)");
+    args->inputBytesOption = cmd->add_option(
+            "--input-bytes", args->inputBytes, "Input size in bytes, given directly");
+    cmd->add_flag(
+            "--paths",
+            args->paths,
+            "Select (no drawing, every page resident) along camera paths fitted to the scene and "
+            "count "
+            "the nodes whose cube was drawn");
+    cmd->add_option(
+               "--path-kinds", args->pathKinds, "Paths for --paths: orbit, flythrough, teleports")
+            ->check(CLI::IsMember({"orbit", "flythrough", "teleports"}))
+            ->capture_default_str();
+    cmd->add_option("--frames", args->frames, "Frames per path for --paths")
+            ->check(CLI::Range(1, 100000))
+            ->capture_default_str();
+    cmd->add_option("--epsilon", args->epsilon, "Pixel threshold of the cube rule for --paths")
+            ->capture_default_str();
+    cmd->add_option("--size", args->size, "Viewport WIDTHxHEIGHT for --paths")
+            ->capture_default_str();
+    inputOption->excludes(args->inputBytesOption);
+    return [args]() { return runStats(*args); };
+}
+
+} // namespace ff::viewer
