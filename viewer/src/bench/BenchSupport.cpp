@@ -29,9 +29,19 @@ void removeWorkFolder(const BenchOptions& options) {
 
 Status CsvTable::write(const std::filesystem::path& path) const {
     std::ofstream out(path);
-    auto line = [&out](const std::vector<std::string>& cells) {
+    // RFC 4180: a cell with a comma, quote or line break is quoted, its quotes doubled (labels
+    // come from scenario files and may hold anything).
+    auto cell = [](const std::string& text) {
+        if (text.find_first_of(",\"\n\r") == std::string::npos)
+            return text;
+        std::string quoted = "\"";
+        for (char c : text)
+            quoted += c == '"' ? std::string("\"\"") : std::string(1, c);
+        return quoted + "\"";
+    };
+    auto line = [&out, &cell](const std::vector<std::string>& cells) {
         for (std::size_t i = 0; i < cells.size(); ++i)
-            out << (i ? "," : "") << cells[i];
+            out << (i ? "," : "") << cell(cells[i]);
         out << "\n";
     };
     line(mColumns);
