@@ -130,9 +130,12 @@ int runReplay(const ReplayArgs& args) {
     if (!source)
         return reportError("replay", source.status().withContext(args.scene));
     auto counting = std::make_shared<CountingSource>(std::move(*source));
-    // --sync is a reference: one reader and no refused requests make it repeatable.
+    // --sync is a reference: one reader and no refused requests make it repeatable. Asynchronous,
+    // at least --uploads-per-frame reads may be under way, so that a frame can install that many.
+    const auto maxInFlight = static_cast<std::uint32_t>(
+            std::clamp<std::size_t>(args.uploadsPerFrame, cache::PageCacheOptions{}.maxInFlight, 1u << 20));
     auto streamingPages = args.sync ? openStreaming(**scene, counting, args.cacheMb << 20, 1, 1u << 30)
-                                    : openStreaming(**scene, counting, args.cacheMb << 20, args.ioThreads);
+                                    : openStreaming(**scene, counting, args.cacheMb << 20, args.ioThreads, maxInFlight);
     if (!streamingPages)
         return reportError("replay", streamingPages.status());
     cache::PageCache* pageCache = streamingPages->cache.get();
@@ -370,7 +373,7 @@ CommandRunner addReplayCommand(CLI::App& app) {
     cmd->add_option("--size", args->size, "Image size WIDTHxHEIGHT")->capture_default_str();
     cmd->add_option("--epsilon", args->epsilon, "Color-cube threshold in pixels")->capture_default_str();
     cmd->add_option("--io-threads", args->ioThreads, "Background read threads")->capture_default_str();
-    cmd->add_option("--uploads-per-frame", args->uploadsPerFrame, "Finished reads installed per frame at most")
+    cmd->add_option("--uploads-per-frame", args->uploadsPerFrame, "Finished reads installed per frame at most (also the reads under way at most, if above 64)")
             ->capture_default_str();
     cmd->add_option("--prefetch-frames", args->prefetchFrames,
                     "Also ask for the pages of the view this many frames ahead on the path (0: off)")
