@@ -68,7 +68,7 @@ std::vector<char> readBytes(const fs::path& path) {
 BuildOptions smallOptions(unsigned threads = 1) {
     BuildOptions options;
     options.memoryBudgetBytes = SceneBuilder::kMinimumBudgetBytes;
-    options.pageSize = storage::kMinPageSize; // many pages: treelets and runs cross page ends
+    options.pageSize = storage::kMinPageSize; // many pages: node levels and runs cross page ends
     options.threads = threads;
     return options;
 }
