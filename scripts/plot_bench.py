@@ -137,8 +137,11 @@ def paging(data, out, name):
     fig, ax = plt.subplots(figsize=(6.5, 4.5))
     for family in sorted({r["family"] for r in data}):
         sel = [r for r in data if r["family"] == family]
-        ax.plot([float(r["triangles"]) for r in sel], [float(r["complete_frame_bytes"]) / 2**20 for r in sel], "o-",
-                label=family)
+        line, = ax.plot([float(r["triangles"]) for r in sel], [float(r["complete_frame_bytes"]) / 2**20 for r in sel],
+                        "o-", label=family)
+        if sel and "node_page_bytes" in sel[0]:
+            ax.plot([float(r["triangles"]) for r in sel], [float(r["node_page_bytes"]) / 2**20 for r in sel], "--",
+                    color=line.get_color(), alpha=0.7, label=family + ": node pages")
     ax.axhline(64, color="k", linestyle=":", label="target: 64 MB at 10^9 triangles")
     ax.set_xscale("log")
     ax.set_xlabel("triangles in the scene (log)")

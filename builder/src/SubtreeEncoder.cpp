@@ -2,8 +2,9 @@
 
 #include <ff/storage/Assert.h>
 
+#include <algorithm>
 #include <cstring>
-#include <deque>
+#include <span>
 
 namespace ff::builder {
 
@@ -31,6 +32,43 @@ storage::NodeRecord toRecord(const BuildNode& node) {
 
 bool isRelocatable(const storage::NodeRecord& r) {
     return r.kind == static_cast<std::uint8_t>(storage::NodeKind::Cell);
+}
+
+// Triangles arrive in depth-first order (a node's own triangles, then its children's). They are
+// written in the nodes' breadth-first order instead, the order of the node pages: a node's
+// triangles are drawn when the node is visited and at least ε pixels large (a leaf draws
+// them, an inner node draws its large triangles and refines), the same test at the same level
+// for neighbours, so the geometry a cut needs is the levels above it, contiguous. Depth-first,
+// a leaf that stopped a level early (large on screen) shares its page with the deeper leaves
+// around it, which the frame does not draw: 1% of the geometry bytes used at 16 M triangles
+// (docs/results/paging.md). Permutes in place through a 4-byte destination index per triangle,
+// within the builder's per-triangle memory plan; a subtree of 2^32 triangles or more keeps
+// depth-first order.
+void orderGeometryBreadthFirst(
+        std::vector<BuildNode>& nodes,
+        std::span<const std::uint32_t> breadthFirst,
+        std::vector<storage::PackedTriangle>& triangles) {
+    if (triangles.empty() || triangles.size() >= 0xFFFFFFFFull)
+        return;
+    std::vector<std::uint32_t> destination(triangles.size());
+    std::uint64_t cursor = 0;
+    for (const std::uint32_t n : breadthFirst) {
+        BuildNode& node = nodes[n];
+        if (node.external || node.triangleCount == 0)
+            continue;
+        for (std::uint64_t k = 0; k < node.triangleCount; ++k)
+            destination[node.firstTriangle + k] = static_cast<std::uint32_t>(cursor + k);
+        node.firstTriangle = cursor;
+        cursor += node.triangleCount;
+    }
+    FF_ASSERT(cursor == triangles.size()); // every triangle belongs to exactly one node
+    for (std::size_t i = 0; i < triangles.size(); ++i) {
+        while (destination[i] != i) {
+            const std::uint32_t j = destination[i];
+            std::swap(triangles[i], triangles[j]);
+            std::swap(destination[i], destination[j]);
+        }
+    }
 }
 
 } // namespace
@@ -64,44 +102,33 @@ EncodedSubtree encodeSubtree(
         }
     };
 
-    // Pages fill breadth-first from sibling blocks, whole blocks only. A block that does not fit
-    // the current page waits in `pending`; when the page's own subtree is exhausted the next
-    // pending block continues in the same page if it fits, so small subtrees share pages
-    // instead of each opening one.
-    std::deque<std::uint32_t> pending; // nodes whose children block is not placed yet
-    auto fits = [&](std::uint32_t count) { return pages.back().size() + count <= perPage; };
-    auto fillFrom = [&](std::deque<std::uint32_t> local) {
-        while (!local.empty()) {
-            const std::uint32_t n = local.front();
-            local.pop_front();
-            const BuildNode& node = nodes[n];
-            if (node.childCount == 0 || node.external)
-                continue;
-            FF_ASSERT(node.childCount <= perPage);
-            if (!fits(node.childCount)) {
-                pending.push_back(n);
-                continue;
-            }
-            placeBlock(node.firstChild, node.childCount);
-            for (std::uint32_t c = 0; c < node.childCount; ++c)
-                local.push_back(node.firstChild + c);
-        }
-    };
-
+    // Pages fill with whole sibling blocks in breadth-first order of the whole subtree: level
+    // by level, and within a level in octant (Morton) order, so a page holds one level of one
+    // neighbourhood. A frame's cut runs through the hierarchy at about one level per
+    // neighbourhood and refines every node above it, so the pages it needs are the levels
+    // down to the cut and hold few records it does not use; treelets (a subtree per page,
+    // several levels deep) would bring in the levels below the cut with them (measured in
+    // docs/results/paging.md: 22% of the node bytes used at 64 M triangles, against ~90%).
+    std::vector<std::uint32_t> order; // breadth-first, each node once
+    order.reserve(nodes.size());
+    order.push_back(0);
     if (placeRoot) {
         pages.emplace_back();
         placeBlock(0, 1);
-        fillFrom({0});
-    } else if (nodes[0].childCount > 0) {
-        pending.push_back(0);
     }
-    while (!pending.empty()) {
-        const std::uint32_t parent = pending.front();
-        pending.pop_front();
-        if (pages.empty() || !fits(nodes[parent].childCount))
+    for (std::size_t i = 0; i < order.size(); ++i) {
+        const BuildNode& node = nodes[order[i]];
+        if (node.childCount == 0 || node.external)
+            continue;
+        FF_ASSERT(node.childCount <= perPage);
+        if (pages.empty() || pages.back().size() + node.childCount > perPage)
             pages.emplace_back();
-        fillFrom({parent});
+        placeBlock(node.firstChild, node.childCount);
+        for (std::uint32_t c = 0; c < node.childCount; ++c)
+            order.push_back(node.firstChild + c);
     }
+
+    orderGeometryBreadthFirst(nodes, order, triangles);
 
     EncodedSubtree out;
     auto recordOf = [&](std::uint32_t n) {

@@ -33,10 +33,11 @@ struct EncodedSubtree {
 };
 
 /**
- * Lays `nodes` (nodes[0] = root, children contiguous) out in treelet pages: each page is filled
- * breadth-first from a sibling block, whole sibling blocks only, so a traversal that enters a
- * page finds the next levels of that subtree in it. With `placeRoot` false the root is left out
- * (its parent, built later, holds it). Takes ownership of the triangles.
+ * Lays `nodes` (nodes[0] = root, children contiguous) out in pages: whole sibling blocks in
+ * breadth-first order of the subtree (level by level, octant order within a level), so the
+ * pages a cut needs are the levels above it. The nodes' triangles are reordered into the same
+ * breadth-first order, for the same reason. With `placeRoot` false the root is left out (its
+ * parent, built later, holds it). Takes ownership of the triangles.
  */
 EncodedSubtree encodeSubtree(
         std::vector<BuildNode> nodes,

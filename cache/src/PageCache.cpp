@@ -237,7 +237,7 @@ void PageCache::beginFrame() {
         m.evictDownTo(m.options.budgetBytes);
 }
 
-std::optional<std::span<const std::byte>> PageCache::tryGet(std::uint64_t page) {
+std::optional<std::span<const std::byte>> PageCache::tryGet(std::uint64_t page, bool* firstUse) {
     Impl& m = *mImpl;
     FF_ASSERT(m.onOwnerThread());
     const auto it = m.entries.find(page);
@@ -247,10 +247,13 @@ std::optional<std::span<const std::byte>> PageCache::tryGet(std::uint64_t page) 
     }
     ++m.stats.hits;
     PageEntry& entry = it->second;
-    if (entry.usedFrame != m.frame) {
+    const bool first = entry.usedFrame != m.frame;
+    if (first) {
         entry.usedFrame = m.frame;
         m.frameBytes += m.pageSize;
     }
+    if (firstUse)
+        *firstUse = first;
     m.lru.touch(page);
     return std::span<const std::byte>(entry.bytes.get(), m.pageSize);
 }

@@ -8,14 +8,18 @@ CachedPageAccess::CachedPageAccess(cache::PageCache& cache, std::uint32_t pageSi
     : mCache(cache)
     , mPageSize(pageSize) {}
 
-void CachedPageAccess::beginFrame() { mCache.beginFrame(); }
+void CachedPageAccess::beginFrame() {
+    mCache.beginFrame();
+    mFrameUse = {};
+}
 
 void CachedPageAccess::endFrame() { mCache.endFrame(); }
 
 PageLookup CachedPageAccess::lookup(std::uint64_t page, storage::PageType type, float priority) {
     if (const auto it = mFailures.find(failureKey(page, type)); it != mFailures.end())
         return {PageAvailability::Failed, {}, &it->second};
-    if (const auto bytes = mCache.tryGet(page)) {
+    bool firstUse = false;
+    if (const auto bytes = mCache.tryGet(page, &firstUse)) {
         // The cache verified the checksum and the page's own index; the type is ours to check.
         storage::PageTrailer trailer{};
         std::memcpy(&trailer, bytes->data() + storage::pagePayloadBytes(mPageSize), sizeof(trailer));
@@ -26,6 +30,10 @@ PageLookup CachedPageAccess::lookup(std::uint64_t page, storage::PageType type, 
                                                              std::to_string(static_cast<int>(type))));
             return {PageAvailability::Failed, {}, &it->second};
         }
+        if (firstUse && type == storage::PageType::Nodes)
+            ++mFrameUse.nodePages;
+        else if (firstUse && type == storage::PageType::Geometry)
+            ++mFrameUse.geometryPages;
         return {PageAvailability::Ready, bytes->first(storage::pagePayloadBytes(mPageSize)), nullptr};
     }
     if (mCache.state(page) == cache::PageState::Failed) {

@@ -68,7 +68,7 @@ std::vector<char> readBytes(const fs::path& path) {
 BuildOptions smallOptions(unsigned threads = 1) {
     BuildOptions options;
     options.memoryBudgetBytes = SceneBuilder::kMinimumBudgetBytes;
-    options.pageSize = storage::kMinPageSize; // many pages: treelets and runs cross page ends
+    options.pageSize = storage::kMinPageSize; // many pages: node levels and runs cross page ends
     options.threads = threads;
     return options;
 }
@@ -393,6 +393,58 @@ TEST(SceneBuilderTest, DefaultPageSizeAndLargeTrianglesRoundTrip) {
     options.pageSize = storage::kDefaultPageSize;
     const BuildReport report = buildOrFail(scene, dir / "scene.ffs", options);
     expectSceneMatches(dir / "scene.ffs", scene, report);
+}
+
+// A frame refines every node down to its cut, so the builder writes a subtree's node records and
+// their triangles in breadth-first order (docs/results/paging.md: the pages a cut needs then
+// hold little it does not use). Walking a prototype built in one piece breadth-first must meet
+// node slots in increasing file order, and each node's triangles right after the previous
+// node's, with and without large triangles kept at inner nodes.
+TEST(SceneBuilderTest, NodesAndTrianglesAreWrittenInBreadthFirstOrder) {
+    const fs::path dir = freshTestDir();
+    std::vector<storage::PackedTriangle> withLarge = cluster(3000, glm::vec3(0.0f), glm::vec3(1.0f), 5);
+    for (int k = 0; k < 20; ++k)
+        withLarge.push_back(triangleAt(glm::vec3(0.5f, 0.5f, 0.05f * static_cast<float>(k)), 0.6f));
+    const std::vector<std::pair<std::string, RecordingSink>> scenes = {
+            {"terrain", generate("terrain:triangles=22000")}, {"large", singlePrototypeScene(withLarge)}};
+    for (const auto& [name, scene] : scenes) {
+        SCOPED_TRACE(name);
+        const fs::path file = dir / (name + ".ffs");
+        const BuildReport report = buildOrFail(scene, file, smallOptions());
+        ASSERT_EQ(report.chunks, 1u); // one subtree, one breadth-first order
+        Result<std::unique_ptr<storage::SceneFile>> opened = storage::SceneFile::open(file);
+        ASSERT_TRUE(opened.isOk()) << opened.status().toString();
+        const storage::SceneFile& sceneFile = **opened;
+        const std::uint32_t perPage = storage::trianglesPerPage(sceneFile.pageSize());
+        ASSERT_EQ(sceneFile.prototypes().size(), 1u);
+
+        std::vector<storage::NodeRef> queue = {sceneFile.prototypes()[0].root};
+        std::uint64_t nextTriangle = 0; // page * perPage + slot of the next run
+        bool firstRun = true;
+        std::uint64_t triangles = 0;
+        for (std::size_t i = 0; i < queue.size(); ++i) {
+            if (i > 0) {
+                const auto before = std::pair(queue[i - 1].page, queue[i - 1].slot);
+                ASSERT_LT(before, std::pair(queue[i].page, queue[i].slot)) << "node " << i;
+            }
+            Result<storage::NodeRecord> node = sceneFile.node(queue[i]);
+            ASSERT_TRUE(node.isOk()) << node.status().toString();
+            for (std::uint32_t c = 0; c < node->childCount; ++c)
+                queue.push_back(storage::SceneFile::childRef(*node, c));
+            if (node->geometryCount == 0)
+                continue;
+            const std::uint64_t start = std::uint64_t{node->geometryPage} * perPage + node->geometryFirst;
+            if (!firstRun) {
+                EXPECT_EQ(start, nextTriangle) << "node " << i;
+            }
+            firstRun = false;
+            // A run continues at slot 0 of the next page (FORMAT.md section 6).
+            nextTriangle = start + node->geometryCount;
+            triangles += node->geometryCount;
+        }
+        EXPECT_EQ(queue.size(), sceneFile.prototypes()[0].nodeCount);
+        EXPECT_EQ(triangles, scene.storedTriangles());
+    }
 }
 
 // ---- instancing ------------------------------------------------------------------------------

@@ -93,6 +93,27 @@ struct HeldSpans {
 
 // ---- creation ---------------------------------------------------------------------------
 
+TEST(PageCacheTest, TryGetTellsWhetherItIsTheFramesFirstUseOfAPage) {
+    auto source = std::make_shared<FakePageSource>(kPageSize, 4);
+    auto cache = makeCache(source, makeOptions(4 * kPageSize));
+    ASSERT_NE(cache, nullptr);
+    loadPages(*cache, {1, 2});
+    for (int frame = 0; frame < 2; ++frame) {
+        cache->beginFrame();
+        bool firstUse = false;
+        ASSERT_TRUE(cache->tryGet(1, &firstUse).has_value());
+        EXPECT_TRUE(firstUse) << "frame " << frame;
+        ASSERT_TRUE(cache->tryGet(1, &firstUse).has_value());
+        EXPECT_FALSE(firstUse) << "frame " << frame;
+        ASSERT_TRUE(cache->tryGet(2, &firstUse).has_value());
+        EXPECT_TRUE(firstUse) << "frame " << frame;
+        firstUse = true;
+        EXPECT_FALSE(cache->tryGet(3, &firstUse).has_value());
+        EXPECT_TRUE(firstUse) << "left alone for a page that is not resident";
+        cache->endFrame();
+    }
+}
+
 TEST(PageCacheTest, RefusesABudgetBelowOnePage) {
     auto source = std::make_shared<FakePageSource>(kPageSize, 10);
     const auto refused = PageCache::create(source, makeOptions(kPageSize - 1));

@@ -131,9 +131,12 @@ int runReplay(const ReplayArgs& args) {
     if (!source)
         return reportError("replay", source.status().withContext(args.scene));
     auto counting = std::make_shared<CountingSource>(std::move(*source));
-    // --sync is a reference: one reader and no refused requests make it repeatable.
+    // --sync is a reference: one reader and no refused requests make it repeatable. Asynchronous,
+    // at least --uploads-per-frame reads may be under way, so that a frame can install that many.
+    const auto maxInFlight = static_cast<std::uint32_t>(
+            std::clamp<std::size_t>(args.uploadsPerFrame, cache::PageCacheOptions{}.maxInFlight, 1u << 20));
     auto streamingPages = args.sync ? openStreaming(**scene, counting, args.cacheMb << 20, 1, 1u << 30)
-                                    : openStreaming(**scene, counting, args.cacheMb << 20, args.ioThreads);
+                                    : openStreaming(**scene, counting, args.cacheMb << 20, args.ioThreads, maxInFlight);
     if (!streamingPages)
         return reportError("replay", streamingPages.status());
     cache::PageCache* pageCache = streamingPages->cache.get();
@@ -168,12 +171,19 @@ int runReplay(const ReplayArgs& args) {
     if (!args.csv.empty()) {
         csv.open(args.csv);
         csv << "frame,time_s,frame_ms,select_ms,draw_ms,requests,hits,misses,bytes_read,resident_bytes,"
-               "gpu_resident_bytes,in_flight,evicted,dropped,nodes_deferred,triangles,cubes,stalled,psnr_db,holes\n";
+               "gpu_resident_bytes,in_flight,evicted,dropped,nodes_deferred,triangles,cubes,stalled,psnr_db,holes,"
+               "node_page_bytes,geometry_page_bytes\n";
     }
     std::vector<double> frameMs;
     std::uint64_t debtFrames = 0;
     std::uint64_t stalledFrames = 0;
     std::uint64_t peakResident = 0;
+    // The frame that used the most page bytes: its pages by type, and how much of them it used.
+    struct FrameUse {
+        runtime::FramePageUse pages;
+        std::uint64_t nodesVisited = 0;
+        std::uint64_t trianglesDrawn = 0;
+    } peakUse;
     ProcessMemory peakMemory;
     std::vector<Status> failures;
     // Frames to full quality: counted from the first frame after a jump in the camera (a
@@ -222,6 +232,9 @@ int runReplay(const ReplayArgs& args) {
 
         const cache::PageCacheStats& now = pageCache->stats();
         peakResident = std::max(peakResident, now.residentBytes);
+        const runtime::FramePageUse& used = access.framePageUse();
+        if (used.nodePages + used.geometryPages >= peakUse.pages.nodePages + peakUse.pages.geometryPages)
+            peakUse = {used, frame->stats.nodesVisited, frame->stats.trianglesDrawn};
         const ProcessMemory memory = processMemory();
         peakMemory.anonBytes = std::max(peakMemory.anonBytes, memory.anonBytes);
         peakMemory.fileBytes = std::max(peakMemory.fileBytes, memory.fileBytes);
@@ -276,6 +289,8 @@ int runReplay(const ReplayArgs& args) {
                 {"stalled", stalled},
                 {"psnr_db", std::isfinite(psnr) ? nlohmann::json(psnr) : nlohmann::json(nullptr)},
                 {"holes", holes},
+                {"node_page_bytes", used.nodePages * (*scene)->pageSize()},
+                {"geometry_page_bytes", used.geometryPages * (*scene)->pageSize()},
         };
         if (csv.is_open()) {
             csv << f << ',' << row["time_s"] << ',' << ms << ',' << frame->stats.selectMs << ',' << frame->stats.drawMs
@@ -283,7 +298,8 @@ int runReplay(const ReplayArgs& args) {
                 << now.residentBytes << ',' << row["gpu_resident_bytes"] << ',' << now.inFlight << ','
                 << row["evicted"] << ',' << row["dropped"] << ',' << frame->stats.nodesDeferred << ','
                 << frame->stats.trianglesDrawn << ',' << frame->stats.cubesDrawn << ',' << (stalled ? 1 : 0) << ','
-                << (std::isfinite(psnr) ? std::to_string(psnr) : std::string()) << ',' << holes << '\n';
+                << (std::isfinite(psnr) ? std::to_string(psnr) : std::string()) << ',' << holes << ','
+                << row["node_page_bytes"] << ',' << row["geometry_page_bytes"] << '\n';
         }
         perFrame.push_back(row);
         previous = now;
@@ -293,6 +309,10 @@ int runReplay(const ReplayArgs& args) {
 
     const cache::PageCacheStats& total = pageCache->stats();
     const std::uint64_t uniqueBytes = counting->uniquePages() * (*scene)->pageSize();
+    const std::uint32_t pageSize = (*scene)->pageSize();
+    const auto share = [](std::uint64_t used, std::uint64_t slots) {
+        return slots ? static_cast<double>(used) / static_cast<double>(slots) : 0.0;
+    };
     const nlohmann::json summary = {
             {"scene", args.scene},
             {"path", args.path},
@@ -305,6 +325,15 @@ int runReplay(const ReplayArgs& args) {
             {"unique_bytes", uniqueBytes},
             {"over_fetch", uniqueBytes ? static_cast<double>(total.bytesRead) / static_cast<double>(uniqueBytes) : 0.0},
             {"peak_resident_bytes", peakResident},
+            // The frame that used the most pages: node against geometry page bytes, and the
+            // share of their slots it used (records visited, triangles drawn).
+            {"frame_node_bytes", peakUse.pages.nodePages * pageSize},
+            {"frame_geometry_bytes", peakUse.pages.geometryPages * pageSize},
+            {"frame_nodes_visited", peakUse.nodesVisited},
+            {"frame_triangles_drawn", peakUse.trianglesDrawn},
+            {"frame_node_slot_use", share(peakUse.nodesVisited, peakUse.pages.nodePages * storage::nodesPerPage(pageSize))},
+            {"frame_triangle_slot_use",
+             share(peakUse.trianglesDrawn, peakUse.pages.geometryPages * storage::trianglesPerPage(pageSize))},
             {"budget_bytes", pageCache->budgetBytes()},
             {"debt_frames", debtFrames},
             {"stalled_frames", stalledFrames},
@@ -351,7 +380,7 @@ CommandRunner addReplayCommand(CLI::App& app) {
             ->check(CLI::Range(0.0f, 1.0f))
             ->capture_default_str();
     cmd->add_option("--io-threads", args->ioThreads, "Background read threads")->capture_default_str();
-    cmd->add_option("--uploads-per-frame", args->uploadsPerFrame, "Finished reads installed per frame at most")
+    cmd->add_option("--uploads-per-frame", args->uploadsPerFrame, "Finished reads installed per frame at most (also the reads under way at most, if above 64)")
             ->capture_default_str();
     cmd->add_option("--prefetch-frames", args->prefetchFrames,
                     "Also ask for the pages of the view this many frames ahead on the path (0: off)")

@@ -52,7 +52,8 @@ Status runPaging(const PagingParams& p, const Scenario& scenario, const BenchOpt
         ladder.push_back({"forest", "forest:trees=" + std::to_string(trees)});
     for (const std::int64_t triangles : p.terrainTriangles)
         ladder.push_back({"terrain", "terrain:triangles=" + std::to_string(triangles)});
-    CsvTable workingSet({"family", "spec", "triangles", "file_bytes", "complete_frame_bytes", "frame_ms"});
+    CsvTable workingSet({"family", "spec", "triangles", "file_bytes", "complete_frame_bytes", "node_page_bytes",
+                         "geometry_page_bytes", "nodes_visited", "triangles_drawn", "frame_ms"});
     for (const Step& step : ladder) {
         std::fprintf(stderr, "%s: working set of %s\n", prefix.c_str(), step.spec.c_str());
         FF_RETURN_IF_ERROR(runChild({ff, "build", "-q", "--generate", step.spec, "-o", scene.string(), "--report",
@@ -70,6 +71,10 @@ Status runPaging(const PagingParams& p, const Scenario& scenario, const BenchOpt
         workingSet.addRow({step.family, step.spec, std::to_string(report.value("instanced_triangles", std::uint64_t{0})),
                            std::to_string(report["bytes"].value("file", std::uint64_t{0})),
                            std::to_string(s.value("peak_resident_bytes", std::uint64_t{0})),
+                           std::to_string(s.value("frame_node_bytes", std::uint64_t{0})),
+                           std::to_string(s.value("frame_geometry_bytes", std::uint64_t{0})),
+                           std::to_string(s.value("frame_nodes_visited", std::uint64_t{0})),
+                           std::to_string(s.value("frame_triangles_drawn", std::uint64_t{0})),
                            formatNumber(s.value("p50_ms", 0.0))});
     }
     const std::filesystem::path workingSetCsv = options.outDir / (prefix + "-working-set.csv");

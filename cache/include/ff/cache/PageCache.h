@@ -98,8 +98,10 @@ public:
      *  setBudget() below them, are evicted down to the budget now). */
     void beginFrame();
     /** The bytes of a resident page, marked used by this frame (not evictable until the next
-     *  beginFrame). The span stays valid until then. Counts a hit or a miss. */
-    std::optional<std::span<const std::byte>> tryGet(std::uint64_t page);
+     *  beginFrame). The span stays valid until then. Counts a hit or a miss. When the page is
+     *  resident and `firstUse` is given, *firstUse tells whether this is the frame's first
+     *  tryGet of it (callers count the distinct pages a frame used). */
+    std::optional<std::span<const std::byte>> tryGet(std::uint64_t page, bool* firstUse = nullptr);
     /** Asks for a page; a higher priority is fetched first (equal priorities: first asked, first
      *  read). Renewing a request updates its priority and keeps it alive through endFrame().
      *  No-op for resident or failed pages. A page >= the source's pageCount fails at once

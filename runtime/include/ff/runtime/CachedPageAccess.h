@@ -8,6 +8,12 @@
 
 namespace ff::runtime {
 
+/** Distinct pages one frame used (found Ready), by type: the frame's working set. */
+struct FramePageUse {
+    std::uint64_t nodePages = 0;
+    std::uint64_t geometryPages = 0;
+};
+
 /**
  * Pages through the streaming PageCache: Ready only when resident, otherwise requested with the
  * caller's priority. A frame is bracketed by beginFrame()/endFrame() (endFrame cancels requests
@@ -23,11 +29,15 @@ public:
     void endFrame() override;
 
     cache::PageCache& cache() noexcept { return mCache; }
+    /** Pages the current (or, after endFrame(), the last) frame found Ready, counted once each;
+     *  everything looked up between beginFrame() and endFrame() counts, prefetch included. */
+    const FramePageUse& framePageUse() const noexcept { return mFrameUse; }
 
 private:
     cache::PageCache& mCache;
     std::uint32_t mPageSize;
     std::unordered_map<std::uint64_t, Status> mFailures;
+    FramePageUse mFrameUse;
 };
 
 } // namespace ff::runtime
