@@ -45,6 +45,12 @@ float cubeAnisotropy(const storage::NodeRecord& node) {
     return hi - lo;
 }
 
+/** SelectionOptions::maxCubeAnisotropy. Anisotropy never exceeds 1, so with the default (1)
+ *  nothing is measured. */
+bool refusedAsAnisotropic(const storage::NodeRecord& node, float limit) {
+    return limit < 1.0f && refinable(node) && cubeAnisotropy(node) > limit;
+}
+
 // Priorities for pages nobody can see the size of yet (the root, a full draw).
 constexpr float kTopPriority = 1e30f;
 
@@ -179,7 +185,7 @@ void Selection::visit(const storage::NodeRecord& node, storage::NodeRef ref, std
     else if (distance > radius)
         projected = 2.0f * radius * mPixelScale / (distance - radius);
     if (projected < mOptions.epsilonPixels && (node.flags & storage::kNodeHasCube) &&
-        !(refinable(node) && cubeAnisotropy(node) > mOptions.maxCubeAnisotropy)) {
+        !refusedAsAnisotropic(node, mOptions.maxCubeAnisotropy)) {
         emitCube(node, ref, transform);
         return;
     }

@@ -25,7 +25,6 @@
 #include <fstream>
 #include <memory>
 #include <mutex>
-#include <sstream>
 #include <string>
 #include <unordered_set>
 #include <vector>
@@ -115,14 +114,9 @@ int runReplay(const ReplayArgs& args) {
     if (args.cacheMb == 0 || args.uploadsPerFrame == 0 || args.ioThreads == 0)
         return reportError("replay", Status(ErrorCode::InvalidArgument, "--cache-mb, --uploads-per-frame and --io-threads must be positive"));
 
-    std::ifstream pathFile(args.path);
-    if (!pathFile)
-        return reportError("replay", Status(ErrorCode::NotFound, "cannot read camera path " + args.path));
-    std::stringstream pathText;
-    pathText << pathFile.rdbuf();
-    auto path = runtime::CameraPath::fromJson(pathText.str());
+    auto path = readCameraPath(args.path);
     if (!path)
-        return reportError("replay", path.status().withContext(args.path));
+        return reportError("replay", path.status());
 
     auto scene = storage::SceneFile::open(args.scene);
     if (!scene)
