@@ -37,30 +37,31 @@ Coverage compare(const runtime::Image& approximation, const runtime::Image& refe
     return c;
 }
 
+/** `a` followed by `b`: a view's flags plus a method's. */
+std::vector<std::string> concat(std::vector<std::string> a, const std::vector<std::string>& b) {
+    a.insert(a.end(), b.begin(), b.end());
+    return a;
+}
+
 /** Renders `scene` with `flags` into dir/name and decodes it; a failed render fails the test. */
-runtime::Image render(const fs::path& dir, const fs::path& scene, const std::string& name, std::vector<std::string> flags) {
-    std::vector<std::string> args = {"render", scene.string(), "-o", (dir / name).string()};
-    args.insert(args.end(), flags.begin(), flags.end());
-    const ProcessResult r = runFarfield(args, dir);
+runtime::Image render(const fs::path& dir, const fs::path& scene, const std::string& name, const std::vector<std::string>& flags) {
+    const ProcessResult r = runFarfield(concat({"render", scene.string(), "-o", (dir / name).string()}, flags), dir);
     EXPECT_EQ(r.exitCode, 0) << r.describe();
     return decodeImage(dir / name);
 }
 
-/** Renders and returns the frame statistics `render` prints as JSON on stdout. */
-nlohmann::json renderStats(const fs::path& dir, const fs::path& scene, std::vector<std::string> flags) {
-    std::vector<std::string> args = {"render", scene.string(), "-o", (dir / "stats.png").string()};
-    args.insert(args.end(), flags.begin(), flags.end());
-    const ProcessResult r = runFarfield(args, dir);
+/** Renders and returns the frame statistics `render` prints as one JSON line on stdout (a
+ *  null json if it printed none). */
+nlohmann::json renderStats(const fs::path& dir, const fs::path& scene, const std::vector<std::string>& flags) {
+    const ProcessResult r = runFarfield(concat({"render", scene.string(), "-o", (dir / "stats.png").string()}, flags), dir);
     EXPECT_EQ(r.exitCode, 0) << r.describe();
-    const std::string last = r.out.substr(r.out.rfind('{'));
-    return nlohmann::json::parse(last, nullptr, false);
+    const std::size_t last = r.out.rfind('{');
+    return last == std::string::npos ? nlohmann::json() : nlohmann::json::parse(r.out.substr(last), nullptr, false);
 }
 
-fs::path buildScene(const fs::path& dir, const std::string& name, std::vector<std::string> flags) {
+fs::path buildScene(const fs::path& dir, const std::string& name, const std::vector<std::string>& flags) {
     const fs::path scene = dir / name;
-    std::vector<std::string> args = {"build", "-q", "-o", scene.string()};
-    args.insert(args.end(), flags.begin(), flags.end());
-    const ProcessResult r = runFarfield(args, dir);
+    const ProcessResult r = runFarfield(concat({"build", "-q", "-o", scene.string()}, flags), dir);
     EXPECT_EQ(r.exitCode, 0) << r.describe();
     return scene;
 }
@@ -76,26 +77,15 @@ double fraction(std::uint64_t part, std::uint64_t whole) {
 // a regression.
 TEST(FailureRegimeTest, TearingOfAScannedSurfaceSeen45DegreesOffAxisIsBounded) {
     const fs::path dir = freshTestDir();
-    const fs::path scene = dir / "skull.ffs";
-    const ProcessResult built = runFarfield(
-            {"build", "-q", FF_SHARED_DATA_DIR "/scanned/skull/skull.glb", "-o", scene.string()}, dir);
-    ASSERT_EQ(built.exitCode, 0) << built.describe();
+    const fs::path scene = buildScene(dir, "skull.ffs", {FF_SHARED_DATA_DIR "/scanned/skull/skull.glb"});
     for (const char* distance : {"6", "12"}) {
         const std::vector<std::string> view = {"--size", "160x120", "--distance", distance, "--azimuth", "45",
                                                "--elevation", "35", "--coverage-alpha"};
-        auto render = [&](const std::string& name, std::vector<std::string> flags) {
-            std::vector<std::string> args = {"render", scene.string(), "-o", (dir / name).string()};
-            args.insert(args.end(), view.begin(), view.end());
-            args.insert(args.end(), flags.begin(), flags.end());
-            const ProcessResult r = runFarfield(args, dir);
-            EXPECT_EQ(r.exitCode, 0) << r.describe();
-            return decodeImage(dir / name);
-        };
-        const runtime::Image reference = render("reference.png", {"--method", "full", "--supersample", "4"});
+        const runtime::Image reference = render(dir, scene, "reference.png", concat(view, {"--method", "full", "--supersample", "4"}));
         ASSERT_EQ(reference.width, 160);
         for (const char* mode : {"faces", "points"}) {
             SCOPED_TRACE(std::string("distance ") + distance + ", cubes as " + mode);
-            const runtime::Image approximation = render(std::string(mode) + ".png", {"--cube-draw", mode});
+            const runtime::Image approximation = render(dir, scene, std::string(mode) + ".png", concat(view, {"--cube-draw", mode}));
             ASSERT_EQ(approximation.width, 160);
             const Coverage c = compare(approximation, reference);
             ASSERT_GT(c.covered, 100u);
@@ -114,14 +104,10 @@ TEST(FailureRegimeTest, TearingOfALargeSmoothSphereSeen45DegreesOffAxisIsBounded
     for (const char* distance : {"2", "6"}) {
         const std::vector<std::string> view = {"--size", "160x120", "--distance", distance, "--azimuth", "45",
                                                "--elevation", "35", "--coverage-alpha"};
-        auto with = [&view](std::vector<std::string> flags) {
-            flags.insert(flags.begin(), view.begin(), view.end());
-            return flags;
-        };
-        const runtime::Image reference = render(dir, scene, "reference.png", with({"--method", "full", "--supersample", "4"}));
+        const runtime::Image reference = render(dir, scene, "reference.png", concat(view, {"--method", "full", "--supersample", "4"}));
         for (const char* mode : {"faces", "points"}) {
             SCOPED_TRACE(std::string("distance ") + distance + ", cubes as " + mode);
-            const Coverage c = compare(render(dir, scene, "a.png", with({"--cube-draw", mode})), reference);
+            const Coverage c = compare(render(dir, scene, "a.png", concat(view, {"--cube-draw", mode})), reference);
             ASSERT_GT(c.covered, 300u);
             EXPECT_LE(fraction(c.holes, c.covered), 0.01);
             EXPECT_LE(fraction(c.overCovered, c.covered), 0.05);
@@ -149,13 +135,9 @@ TEST(FailureRegimeTest, VenetianBlindsLeakAtGrazingViewsUnlessAnisotropicCubesAr
         SCOPED_TRACE(std::string("elevation ") + v.elevation);
         const std::vector<std::string> view = {"--size", "160x120", "--distance", "12", "--azimuth", "20",
                                                "--elevation", v.elevation, "--coverage-alpha"};
-        auto with = [&view](std::vector<std::string> flags) {
-            flags.insert(flags.begin(), view.begin(), view.end());
-            return flags;
-        };
-        const runtime::Image reference = render(dir, scene, "reference.png", with({"--method", "full", "--supersample", "4"}));
-        const Coverage accepted = compare(render(dir, scene, "accepted.png", with({})), reference);
-        const Coverage refused = compare(render(dir, scene, "refused.png", with({"--cube-anisotropy", "0.6"})), reference);
+        const runtime::Image reference = render(dir, scene, "reference.png", concat(view, {"--method", "full", "--supersample", "4"}));
+        const Coverage accepted = compare(render(dir, scene, "accepted.png", view), reference);
+        const Coverage refused = compare(render(dir, scene, "refused.png", concat(view, {"--cube-anisotropy", "0.6"})), reference);
         ASSERT_GT(accepted.covered, 150u);
         EXPECT_LE(fraction(accepted.holes, accepted.covered), v.defaultHoles);
         EXPECT_LE(fraction(refused.holes, refused.covered), v.refusedHoles);
@@ -174,12 +156,8 @@ TEST(FailureRegimeTest, InsideTheSceneTheHierarchyDrawsNoMoreThanBruteForce) {
     for (const auto& [scene, distance] : {std::pair{tree, "0.3"}, std::pair{tree, "0.8"}, std::pair{forest, "0.2"}}) {
         SCOPED_TRACE(scene.filename().string() + " at " + distance + " radii");
         const std::vector<std::string> view = {"--size", "160x120", "--distance", distance, "--azimuth", "30", "--elevation", "5"};
-        auto with = [&view](std::vector<std::string> flags) {
-            flags.insert(flags.begin(), view.begin(), view.end());
-            return flags;
-        };
-        const nlohmann::json full = renderStats(dir, scene, with({"--method", "full"}));
-        const nlohmann::json hierarchical = renderStats(dir, scene, with({}));
+        const nlohmann::json full = renderStats(dir, scene, concat(view, {"--method", "full"}));
+        const nlohmann::json hierarchical = renderStats(dir, scene, view);
         ASSERT_TRUE(full.is_object() && hierarchical.is_object());
         const double fullWork = full["triangles_drawn"].get<double>();
         const double work = hierarchical["triangles_drawn"].get<double>() + 6.0 * hierarchical["cubes_drawn"].get<double>();
@@ -196,24 +174,15 @@ TEST(FailureRegimeTest, InsideTheSceneTheHierarchyDrawsNoMoreThanBruteForce) {
 TEST(FailureRegimeTest, ASceneFarFromTheOriginAndTinyRendersLikeTheOriginal) {
     const fs::path dir = freshTestDir();
     const fs::path plain = buildScene(dir, "plain.ffs", {"--generate", "forest:trees=1"});
-    const fs::path far = buildScene(dir, "far.ffs", {"--generate", "forest:trees=1", "--offset", "1e6,1e6,1e6", "--scale", "1e-3"});
-    const nlohmann::json report = [&] {
-        const fs::path r = dir / "report.json";
-        EXPECT_EQ(runFarfield({"build", "-q", "--generate", "forest:trees=1", "--offset", "1e6,1e6,1e6", "--scale", "1e-3",
-                               "-o", (dir / "again.ffs").string(), "--report", r.string()}, dir).exitCode, 0);
-        return readJsonFile(r);
-    }();
+    const fs::path far = buildScene(dir, "far.ffs", {"--generate", "forest:trees=1", "--offset", "1e6,1e6,1e6", "--scale", "1e-3", "--report", (dir / "far.json").string()});
+    const nlohmann::json report = readJsonFile(dir / "far.json");
     ASSERT_TRUE(report.contains("origin"));
     EXPECT_NEAR(report["origin"][0].get<double>(), 1e6, 1.0);
 
     auto expectSame = [&](const std::vector<std::string>& plainView, const std::vector<std::string>& farView) {
-        std::vector<std::string> common = {"--size", "160x120", "--coverage-alpha"};
-        auto with = [&common](std::vector<std::string> flags) {
-            flags.insert(flags.end(), common.begin(), common.end());
-            return flags;
-        };
-        const runtime::Image a = render(dir, plain, "plain.png", with(plainView));
-        const runtime::Image b = render(dir, far, "far.png", with(farView));
+        const std::vector<std::string> common = {"--size", "160x120", "--coverage-alpha"};
+        const runtime::Image a = render(dir, plain, "plain.png", concat(plainView, common));
+        const runtime::Image b = render(dir, far, "far.png", concat(farView, common));
         const Coverage c = compare(b, a);
         ASSERT_GT(c.covered, 500u);
         EXPECT_LE(fraction(c.holes + c.overCovered, c.covered), 0.002) << "cracks or shifted silhouette";
