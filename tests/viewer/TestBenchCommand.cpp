@@ -213,7 +213,7 @@ TEST(BenchCommandTest, PathScenarioWritesPerFrameAndSummaryCsvChartAndReport) {
                  "mean_instability",
                  "p95_instability",
                  "max_instability",
-                 "mean_psnr",
+                 "median_psnr",
                  "min_psnr",
                  "p50_ms",
                  "p99_ms",
