@@ -1,7 +1,7 @@
 #!/usr/bin/python3
 """Charts for `farfield bench`: reads a scenario's CSV, writes PNG charts named after it.
 
-usage: plot_bench.py {table2|forest|build|paging|views|path} CSV OUTDIR
+usage: plot_bench.py {table2|forest|build|paging|views|path|replay} CSV OUTDIR
 
 CSV is OUT/NAME.csv (paging: OUT/NAME-working-set.csv, with OUT/NAME-teleports.csv beside it);
 the charts are OUTDIR/NAME.png (views with a sweep also NAME-sweep.png; paging
@@ -155,21 +155,30 @@ def paging(data, out, name):
     prefix = name.removesuffix("-working-set")
     frames = rows(out / f"{prefix}-teleports.csv")
     if frames:
-        fig, (ax1, ax2) = plt.subplots(2, 1, figsize=(9, 5.5), sharex=True)
-        x = [int(r["frame"]) for r in frames]
-        ax1.plot(x, [float(r["frame_ms"]) for r in frames], label="frame ms")
-        ax1.set_ylabel("frame time (ms)")
-        ax1b = ax1.twinx()
-        ax1b.plot(x, [float(r["nodes_deferred"]) for r in frames], color="C3", alpha=0.6, label="debt (nodes deferred)")
-        ax1b.set_ylabel("debt", color="C3")
-        ax2.plot(x, [float(r["resident_bytes"]) / 2**20 for r in frames], label="resident MiB")
-        ax2.plot(x, [float(r["bytes_read"]) / 2**20 for r in frames], label="MiB read this frame")
-        ax2.set_xlabel("frame")
-        ax2.set_ylabel("MiB")
-        ax2.legend(fontsize=8)
-        ax1.set_title("teleports with a cold cache")
-        fig.tight_layout()
-        fig.savefig(out / f"{prefix}-teleports.png", dpi=110)
+        timeline(frames, "teleports with a cold cache", out / f"{prefix}-teleports.png")
+
+
+def timeline(frames, title, png):
+    """Per-frame replay telemetry: frame time and debt above, resident and read bytes below."""
+    fig, (ax1, ax2) = plt.subplots(2, 1, figsize=(9, 5.5), sharex=True)
+    x = [int(r["frame"]) for r in frames]
+    ax1.plot(x, [float(r["frame_ms"]) for r in frames], label="frame ms")
+    ax1.set_ylabel("frame time (ms)")
+    ax1b = ax1.twinx()
+    ax1b.plot(x, [float(r["nodes_deferred"]) for r in frames], color="C3", alpha=0.6, label="debt (nodes deferred)")
+    ax1b.set_ylabel("debt", color="C3")
+    ax2.plot(x, [float(r["resident_bytes"]) / 2**20 for r in frames], label="resident MiB")
+    ax2.plot(x, [float(r["bytes_read"]) / 2**20 for r in frames], label="MiB read this frame")
+    ax2.set_xlabel("frame")
+    ax2.set_ylabel("MiB")
+    ax2.legend(fontsize=8)
+    ax1.set_title(title)
+    fig.tight_layout()
+    fig.savefig(png, dpi=110)
+
+
+def replay(data, out, name):
+    timeline(data, f"{name}: replay through a cold cache", out / f"{name}.png")
 
 
 def panels(count, width=5.0, height=4.2):
@@ -284,7 +293,7 @@ def path(data, out, name):
     fig.savefig(out / f"{name}.png", dpi=110)
 
 
-KINDS = {"table2": table2, "forest": forest, "build": build, "paging": paging, "views": views, "path": path}
+KINDS = {"table2": table2, "forest": forest, "build": build, "paging": paging, "views": views, "path": path, "replay": replay}
 
 
 def main():

@@ -1,10 +1,11 @@
-// `farfield bench SCENARIO` end to end: tiny "views" and "path" scenarios written by the test
+// `farfield bench SCENARIO` end to end: tiny "views", "path" and "replay" scenarios written by the test
 // run through the real binary (CSV rows and columns, charts, report), and scenario mistakes fail
 // with messages that name the problem.
 
 #include "FarfieldProcess.h"
 
 #include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
 
 #include <filesystem>
 #include <fstream>
@@ -231,6 +232,59 @@ TEST(BenchCommandTest, PathScenarioWritesPerFrameAndSummaryCsvChartAndReport) {
     const std::string md = readText(out / "tiny-path.md");
     EXPECT_NE(md.find("# A tiny path scenario"), std::string::npos) << md;
     EXPECT_NE(md.find("](tiny-path.png)"), std::string::npos) << md;
+}
+
+constexpr const char* kReplayScenario = R"({
+  "name": "tiny-replay",
+  "title": "A tiny replay scenario",
+  "kind": "replay",
+  "scene": {"generate": "terrain:triangles=20000"},
+  "build": ["--memory-budget", "16MiB"],
+  "size": [64, 48],
+  "path": {"generator": "flythrough", "frames": 6},
+  "cache_mb": 2
+})";
+
+// The larger-than-RAM benchmark in miniature: build under a budget, replay through a cache far
+// smaller than the file, per-frame telemetry within the budget, and no scene file left behind
+// in the work folder the user named.
+TEST(BenchCommandTest, ReplayScenarioMeasuresBuildAndReplayAndRemovesTheScene) {
+    const fs::path dir = freshTestDir();
+    writeText(dir / "tiny-replay.json", kReplayScenario);
+    const fs::path out = dir / "out";
+    const fs::path work = dir / "work";
+    const ProcessResult r = runFarfield(
+            {"bench", (dir / "tiny-replay.json").string(), "--out", out.string(), "--work-dir", work.string()}, dir);
+    ASSERT_EQ(r.exitCode, 0) << r.describe();
+
+    const std::vector<Row> frames = readCsv(out / "tiny-replay.csv");
+    ASSERT_EQ(frames.size(), 1u + 6);
+    constexpr std::uint64_t kBudget = 2u << 20;
+    std::uint64_t bytesRead = 0;
+    for (std::size_t row = 1; row < frames.size(); ++row) {
+        SCOPED_TRACE("frame " + std::to_string(row - 1));
+        EXPECT_EQ(cell(frames, row, "frame"), std::to_string(row - 1));
+        EXPECT_LE(std::stoull(cell(frames, row, "resident_bytes")), kBudget);
+        bytesRead += std::stoull(cell(frames, row, "bytes_read"));
+    }
+    EXPECT_GT(bytesRead, 0u);
+
+    std::ifstream summaryFile(out / "tiny-replay-summary.json");
+    const nlohmann::json summary = nlohmann::json::parse(summaryFile, nullptr, false);
+    ASSERT_TRUE(summary.is_object());
+    EXPECT_EQ(summary.value("frames", 0), 6);
+    EXPECT_EQ(summary.value("budget_bytes", std::uint64_t{0}), kBudget);
+    EXPECT_EQ(summary.value("bytes_read", std::uint64_t{0}), bytesRead);
+    EXPECT_LE(summary.value("peak_resident_bytes", ~std::uint64_t{0}), kBudget);
+
+    EXPECT_TRUE(fs::is_regular_file(out / "tiny-replay.png"));
+    const std::string md = readText(out / "tiny-replay.md");
+    EXPECT_NE(md.find("# A tiny replay scenario"), std::string::npos) << md;
+    EXPECT_NE(md.find("farfield build --memory-budget 16MiB"), std::string::npos) << md;
+    EXPECT_NE(md.find("| 20000 |"), std::string::npos) << md; // the build row: triangles first
+    EXPECT_NE(md.find("](tiny-replay.png)"), std::string::npos) << md;
+    ASSERT_TRUE(fs::is_directory(work));
+    EXPECT_TRUE(fs::is_empty(work)) << "the scene and its path are removed from --work-dir";
 }
 
 TEST(BenchCommandTest, UnknownKeyFailsNamingTheKeyAndTheFile) {

@@ -42,6 +42,9 @@ Kinds (key "kind"):
            reference (PSNR, SSIM, holes, over-coverage), optionally swept over a parameter
   path     popping and flicker: methods along a generated camera path, per-frame PSNR and
            temporal instability against per-frame full references; optionally streaming
+  replay   a scene built under --memory-budget (time, peak RSS), then a camera path replayed
+           through a cold cache of cache_mb: per-frame telemetry, percentiles, bytes read,
+           peak RSS anon/file (the scene file is removed afterwards)
 --quick applies the scenario's "quick" overrides (smaller ladders: a smoke run, not results).
 --frames is the timed frames per measurement of table2, forest and views (the median, after one
 warm-up); a path scenario draws each frame of its path once.
@@ -151,6 +154,8 @@ Result<BenchRun> prepareScenario(const Scenario& scenario) {
         return prepareViews(scenario);
     if (scenario.kind == "path")
         return preparePath(scenario);
+    if (scenario.kind == "replay")
+        return prepareReplay(scenario);
     return Status(
             ErrorCode::InvalidArgument,
             scenario.where() + ": unknown kind \"" + scenario.kind + "\"");

@@ -187,7 +187,9 @@ int runReplay(const ReplayArgs& args) {
     bool converged = false;
     glm::vec3 lastEye(NAN);
     const float jump = 0.1f * bounds.radius();
-    cache::PageCacheStats previous = pageCache->stats();
+    // Zero, not the stats after opening: frame 0 carries the root pages read before it, so the
+    // per-frame columns add up to the summary's totals.
+    cache::PageCacheStats previous{};
 
     for (std::int64_t f = 0; f < frames; ++f) {
         runtime::Camera camera = path->sample(path->frameTime(f), origin);

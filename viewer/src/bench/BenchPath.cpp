@@ -98,7 +98,7 @@ Status runPath(const PathParams& p, const Scenario& scenario, const BenchOptions
     const std::filesystem::path scenePath = work / (scenario.name + ".ffs");
     std::fprintf(stderr, "%s: building the scene\n", scenario.name.c_str());
     FF_RETURN_IF_ERROR(
-            buildScene(p.scene, {}, scenePath, options.selfExe).withContext(scenario.where()));
+            buildScene(p.scene, {}, scenePath, options.selfExe).status().withContext(scenario.where()));
     FF_ASSIGN_OR_RETURN(auto file, storage::SceneFile::open(scenePath));
     const runtime::Bounds bounds = sceneBounds(*file);
     auto path = makePath(p, bounds);

@@ -263,6 +263,7 @@ Status runViews(const ViewsParams& p, const Scenario& scenario, const BenchOptio
         if (buildValue)
             extraFlags = {p.sweep.buildFlag(), buildText};
         FF_RETURN_IF_ERROR(buildScene(p.scene, extraFlags, scenePath, options.selfExe)
+                                   .status()
                                    .withContext(scenario.where()));
         FF_ASSIGN_OR_RETURN(auto file, storage::SceneFile::open(scenePath));
         FF_ASSIGN_OR_RETURN(auto renderer, runtime::FrameRenderer::create(*file));

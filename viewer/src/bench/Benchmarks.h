@@ -38,6 +38,10 @@ using BenchRun = std::function<Status(const BenchOptions&)>;
 /** Popping, flicker and paging along a generated camera path, per frame and per method. */
 [[nodiscard]] Result<BenchRun> preparePath(const Scenario& scenario);
 
+/** A scene built (time, peak RSS) and a camera path replayed through a cold cache of a given
+ *  budget: per-frame telemetry and the replay summary (the larger-than-RAM benchmark). */
+[[nodiscard]] Result<BenchRun> prepareReplay(const Scenario& scenario);
+
 /** The prepare function of the scenario's kind. */
 [[nodiscard]] Result<BenchRun> prepareScenario(const Scenario& scenario);
 

@@ -40,7 +40,7 @@ struct Scenario {
 
 /** Scenario kinds `farfield bench` knows. */
 inline constexpr const char* kScenarioKinds[] = {
-        "table2", "forest", "build", "paging", "views", "path"};
+        "table2", "forest", "build", "paging", "views", "path", "replay"};
 
 /**
  * Finds a scenario: an existing file path as given, or a bare name (no '/', no ".json") resolved

@@ -31,7 +31,7 @@ SceneSpec readSceneSpec(ScenarioReader& reader) {
     return spec;
 }
 
-Status buildScene(
+Result<ChildRun> buildScene(
         const SceneSpec& scene,
         const std::vector<std::string>& extraFlags,
         const std::filesystem::path& output,
@@ -43,7 +43,7 @@ Status buildScene(
         argv.insert(argv.end(), {"--generate", scene.generate});
     argv.insert(argv.end(), scene.buildFlags.begin(), scene.buildFlags.end());
     argv.insert(argv.end(), extraFlags.begin(), extraFlags.end());
-    return runChild(argv).status();
+    return runChild(argv);
 }
 
 const char* MethodSpec::methodName() const noexcept {

@@ -3,6 +3,7 @@
 // Parts shared by the "views" and "path" scenario kinds: the scene (and how it is built), the
 // methods compared, the full reference. Keys and meanings: bench/README.md.
 
+#include "BenchSupport.h"
 #include "Scenario.h"
 
 #include <ff/runtime/Selection.h>
@@ -28,8 +29,9 @@ struct SceneSpec {
 SceneSpec readSceneSpec(ScenarioReader& reader);
 
 /** Builds the scene into `output` with a child `farfield build -q` (so every flag means what
- *  it means on the command line), with `extraFlags` after the scenario's own. */
-[[nodiscard]] Status buildScene(
+ *  it means on the command line), with `extraFlags` after the scenario's own; returns the
+ *  child's time and peak RSS. */
+[[nodiscard]] Result<ChildRun> buildScene(
         const SceneSpec& scene,
         const std::vector<std::string>& extraFlags,
         const std::filesystem::path& output,
