@@ -2,6 +2,7 @@
 
 #include "FileFrame.h"
 #include "InstanceLevel.h"
+#include "PageSizeChoice.h"
 #include "PrototypeBuilder.h"
 #include "RunFile.h"
 
@@ -92,6 +93,9 @@ struct SceneBuilder::Impl {
     }
 
     Status spill(PrototypeState& proto, std::span<const storage::PackedTriangle> triangles);
+    /** `--page-size auto`: picks the page size from what the scan saw and reopens the writer
+     *  with it (it has written nothing yet). */
+    Status choosePageSize();
     void progress(const char* phase, std::uint64_t done, std::uint64_t total) const {
         if (options.progress)
             options.progress({phase, done, total});
@@ -108,7 +112,7 @@ Result<std::unique_ptr<SceneBuilder>> SceneBuilder::create(
                 ErrorCode::InvalidArgument,
                 "--memory-budget " + std::to_string(options.memoryBudgetBytes >> 20) + " MiB is below the minimum of " +
                         std::to_string(kMinimumBudgetBytes >> 20) + " MiB");
-    if (!storage::isValidPageSize(options.pageSize))
+    if (options.pageSize && !storage::isValidPageSize(*options.pageSize))
         return Status(ErrorCode::InvalidArgument, "page size must be a power of two between 4 KiB and 16 MiB");
     if (options.hierarchy.bakeResolution < 2 || options.hierarchy.bakeResolution > 64)
         return Status(ErrorCode::InvalidArgument, "bake resolution must be between 2 and 64");
@@ -134,12 +138,15 @@ Result<std::unique_ptr<SceneBuilder>> SceneBuilder::create(
     if (::mkdtemp(pattern.data()) == nullptr)
         return ioStatus(errno, "cannot create temporary directory in", tempRoot);
     impl->tempDirectory = pattern;
+    // Opened now so an unwritable output fails before the scan; with auto, finish() reopens
+    // it once the page size is chosen (nothing is written before that).
     storage::SceneWriterOptions writerOptions;
-    writerOptions.pageSize = options.pageSize;
+    writerOptions.pageSize = options.pageSize.value_or(storage::kDefaultPageSize);
     FF_ASSIGN_OR_RETURN(impl->writer, storage::SceneWriter::create(outputPath, writerOptions));
     impl->spillBufferLimit = static_cast<std::size_t>(options.memoryBudgetBytes / 8);
     impl->report.memoryBudgetBytes = options.memoryBudgetBytes;
-    impl->report.pageSize = options.pageSize;
+    impl->report.pageSize = writerOptions.pageSize;
+    impl->report.pageSizeAuto = !options.pageSize.has_value();
     impl->report.threads = impl->options.threads;
     return std::unique_ptr<SceneBuilder>(new SceneBuilder(std::move(impl)));
 }
@@ -228,6 +235,9 @@ Result<BuildReport> SceneBuilder::finish() {
         Impl& impl;
         ~CleanupGuard() { impl.removeTemporaryFiles(); }
     } guard{s};
+
+    if (report.pageSizeAuto)
+        FF_RETURN_IF_ERROR(s.choosePageSize());
 
     // ---- partition + buildHierarchy, one prototype at a time ---------------------------------
     const std::uint64_t fixedReserve = std::min<std::uint64_t>(s.options.memoryBudgetBytes / 4, 64ull << 20);
@@ -349,13 +359,31 @@ Result<BuildReport> SceneBuilder::finish() {
     phaseEnd("write", start);
     s.progress("write", 1, 1);
 
-    const std::uint64_t page = s.options.pageSize;
+    const std::uint64_t page = report.pageSize;
     report.fileBytes = pageCount * page;
     report.nodeBytes = report.nodePages * page;
     report.geometryBytes = report.geometryPages * page;
     report.tableBytes = report.tablePages * page;
     report.peakRssBytes = peakRssBytes();
     return report;
+}
+
+Status SceneBuilder::Impl::choosePageSize() {
+    PageSizeInputs inputs;
+    inputs.prototypes.resize(prototypes.size());
+    for (std::size_t p = 0; p < prototypes.size(); ++p)
+        inputs.prototypes[p].triangles = prototypes[p]->run.count();
+    for (const auto& [prototype, transform] : instances)
+        ++inputs.prototypes[prototype].instances;
+    const std::uint32_t chosen = builder::choosePageSize(inputs);
+    if (chosen == writer->pageSize())
+        return Status::ok();
+    writer.reset();
+    storage::SceneWriterOptions writerOptions;
+    writerOptions.pageSize = chosen;
+    FF_ASSIGN_OR_RETURN(writer, storage::SceneWriter::create(outputPath, writerOptions));
+    report.pageSize = chosen;
+    return Status::ok();
 }
 
 std::string buildReportJson(const BuildReport& r) {
@@ -379,6 +407,7 @@ std::string buildReportJson(const BuildReport& r) {
             {"instance_level_depth", r.instanceLevelDepth},
             {"chunks", r.chunks},
             {"page_size", r.pageSize},
+            {"page_size_auto", r.pageSizeAuto},
             {"origin", r.origin},
             {"threads", r.threads},
             {"bytes",

@@ -395,6 +395,73 @@ TEST(SceneBuilderTest, DefaultPageSizeAndLargeTrianglesRoundTrip) {
     expectSceneMatches(dir / "scene.ffs", scene, report);
 }
 
+/** Every node of the file in breadth-first order from the root (instances descending into their
+ *  prototypes), with where it is stored left out: its record less the page and slot fields, then
+ *  its own triangles. Two files with equal signatures hold the same hierarchy. */
+std::vector<std::string> hierarchySignature(const storage::SceneFile& file) {
+    std::vector<std::string> signature;
+    std::vector<storage::NodeRef> queue = {file.header().root};
+    std::vector<storage::GeometrySegment> segments;
+    for (std::size_t i = 0; i < queue.size(); ++i) {
+        Result<storage::NodeRecord> record = file.node(queue[i]);
+        EXPECT_TRUE(record.isOk()) << record.status().toString();
+        if (!record.isOk())
+            return signature;
+        storage::NodeRecord node = *record;
+        for (std::uint32_t c = 0; c < node.childCount; ++c)
+            queue.push_back(storage::SceneFile::childRef(node, c));
+        std::string entry;
+        if (node.kind == static_cast<std::uint8_t>(storage::NodeKind::Instance)) {
+            queue.push_back(file.prototypes()[file.instances()[node.geometryPage].prototype].root);
+        } else {
+            segments.clear();
+            EXPECT_TRUE(file.geometrySegments(node, segments).isOk());
+            for (const storage::GeometrySegment& segment : segments) {
+                Result<std::span<const std::byte>> bytes = file.segmentBytes(segment);
+                EXPECT_TRUE(bytes.isOk());
+                if (bytes.isOk())
+                    entry.append(reinterpret_cast<const char*>(bytes->data()), bytes->size());
+            }
+            node.geometryPage = 0;
+            node.geometryFirst = 0;
+        }
+        node.firstChild = storage::kNullNodeRef;
+        entry.insert(0, reinterpret_cast<const char*>(&node), sizeof(node));
+        signature.push_back(std::move(entry));
+    }
+    return signature;
+}
+
+// `--page-size auto` is the default: a small scene gets small pages, so its file loses most of
+// its padding, and nothing else changes: the same nodes, cubes and triangles in the same order.
+TEST(SceneBuilderTest, AutoPageSizeShrinksSmallScenesAndKeepsTheirHierarchy) {
+    const fs::path dir = freshTestDir();
+    const std::vector<std::pair<std::string, RecordingSink>> scenes = {
+            {"mesh", singlePrototypeScene(cluster(700, glm::vec3(0.0f), glm::vec3(1.0f), 3))},
+            {"molecule", generate("molecule:spheres=16,triangles_per_sphere=300")}};
+    for (const auto& [name, scene] : scenes) {
+        SCOPED_TRACE(name);
+        BuildOptions automatic = smallOptions();
+        automatic.pageSize.reset();
+        BuildOptions fixed = smallOptions();
+        fixed.pageSize = storage::kDefaultPageSize;
+        const BuildReport autoReport = buildOrFail(scene, dir / (name + "-auto.ffs"), automatic);
+        const BuildReport fixedReport = buildOrFail(scene, dir / (name + "-64k.ffs"), fixed);
+        EXPECT_TRUE(autoReport.pageSizeAuto);
+        EXPECT_FALSE(fixedReport.pageSizeAuto);
+        EXPECT_LT(autoReport.pageSize, storage::kDefaultPageSize);
+        expectSceneMatches(dir / (name + "-auto.ffs"), scene, autoReport);
+        EXPECT_EQ(autoReport.fileBytes, fs::file_size(dir / (name + "-auto.ffs")));
+        EXPECT_LT(autoReport.fileBytes * 2, fixedReport.fileBytes);
+
+        Result<std::unique_ptr<storage::SceneFile>> autoFile = storage::SceneFile::open(dir / (name + "-auto.ffs"));
+        Result<std::unique_ptr<storage::SceneFile>> fixedFile = storage::SceneFile::open(dir / (name + "-64k.ffs"));
+        ASSERT_TRUE(autoFile.isOk() && fixedFile.isOk());
+        EXPECT_EQ((*autoFile)->pageSize(), autoReport.pageSize);
+        EXPECT_EQ(hierarchySignature(**autoFile), hierarchySignature(**fixedFile));
+    }
+}
+
 // A frame refines every node down to its cut, so the builder writes a subtree's node records and
 // their triangles in breadth-first order (docs/results/paging.md: the pages a cut needs then
 // hold little it does not use). Walking a prototype built in one piece breadth-first must meet

@@ -14,6 +14,7 @@
 #include <filesystem>
 #include <fstream>
 #include <memory>
+#include <optional>
 #include <string>
 
 namespace ff::viewer {
@@ -25,7 +26,7 @@ struct BuildArgs {
     std::string generate;
     std::string output;
     std::string memoryBudget = "1GiB";
-    std::string pageSize = "64KiB";
+    std::string pageSize = "auto";
     unsigned threads = 0;
     int bakeResolution = 8;
     std::string bakeInner = "composite";
@@ -56,13 +57,17 @@ int runBuild(const BuildArgs& args) {
     auto budget = parseByteSize(args.memoryBudget);
     if (!budget)
         return reportError("build", budget.status().withContext("--memory-budget"));
-    auto pageSize = parseByteSize(args.pageSize);
-    if (!pageSize)
-        return reportError("build", pageSize.status().withContext("--page-size"));
+    std::optional<std::uint32_t> pageSize; // auto
+    if (args.pageSize != "auto") {
+        auto bytes = parseByteSize(args.pageSize);
+        if (!bytes)
+            return reportError("build", bytes.status().withContext("--page-size"));
+        pageSize = static_cast<std::uint32_t>(std::min<std::uint64_t>(*bytes, 0xFFFFFFFFu));
+    }
     if (args.bakeInner != "composite" && args.bakeInner != "direct")
         return reportError("build", Status(ErrorCode::InvalidArgument, "--bake-inner must be composite or direct"));
     options.memoryBudgetBytes = *budget;
-    options.pageSize = static_cast<std::uint32_t>(std::min<std::uint64_t>(*pageSize, 0xFFFFFFFFu));
+    options.pageSize = pageSize;
     options.threads = args.threads;
     options.tempDirectory = args.tempDirectory;
     options.hierarchy.bakeResolution = args.bakeResolution;
@@ -122,11 +127,12 @@ int runBuild(const BuildArgs& args) {
             std::fprintf(stderr, "warning: %s\n", w.c_str());
         std::fprintf(stderr,
                      "built %s: %llu triangles drawn (%llu stored), %u prototypes, %llu instances, %llu nodes, "
-                     "%s, %.2f s, peak RSS %s\n",
+                     "%s in %s pages%s, %.2f s, peak RSS %s\n",
                      args.output.c_str(), static_cast<unsigned long long>(report->instancedTriangles),
                      static_cast<unsigned long long>(report->storedTriangles), report->prototypes,
                      static_cast<unsigned long long>(report->instances), static_cast<unsigned long long>(report->nodes),
-                     formatBytes(report->fileBytes).c_str(), json["total_seconds"].get<double>(),
+                     formatBytes(report->fileBytes).c_str(), formatBytes(report->pageSize).c_str(),
+                     report->pageSizeAuto ? " (auto)" : "", json["total_seconds"].get<double>(),
                      formatBytes(report->peakRssBytes).c_str());
         if (report->droppedNonFinite + report->droppedDegenerate > 0)
             std::fprintf(stderr, "dropped %llu triangles with non-finite positions and %llu with zero area\n",
@@ -146,7 +152,7 @@ CommandRunner addBuildCommand(CLI::App& app) {
     cmd->add_option("--generate", args->generate, "Procedural scene instead of a file, e.g. forest:trees=16384");
     cmd->add_option("-o,--output", args->output, "Output scene file")->required();
     cmd->add_option("--memory-budget", args->memoryBudget, "Peak memory for building (e.g. 512MiB, 2GiB)")->capture_default_str();
-    cmd->add_option("--page-size", args->pageSize, "Page size, a power of two from 4KiB to 16MiB")->capture_default_str();
+    cmd->add_option("--page-size", args->pageSize, "Page size, a power of two from 4KiB to 16MiB, or auto: fitted to the scene, up to 64KiB (docs/methods.md)")->capture_default_str();
     cmd->add_option("--threads", args->threads, "Worker threads (0 = all cores)")->capture_default_str();
     cmd->add_option("--bake-resolution", args->bakeResolution, "Samples per cube face edge")->capture_default_str();
     cmd->add_option("--bake-inner", args->bakeInner, "Inner-node cubes: composite (Fig. 3) or direct from geometry")->capture_default_str();

@@ -9,7 +9,7 @@
 //                   counting pass over its run file picks octree cells that fit (chunks) and a
 //                   distribution pass writes each chunk's triangles to a file of its own.
 //   buildHierarchy  each chunk is loaded, built into an octree (cost rule, large-triangle
-//                   tolerance) with color cubes, and encoded into treelet pages, on worker
+//                   tolerance) with color cubes, and encoded into pages, on worker
 //                   threads; results are written in chunk order so the output is deterministic.
 //                   The cells above the chunks (and the large triangles that live there) form
 //                   the prototype's top tree. Then the instance level: an octree over instance
@@ -29,6 +29,7 @@
 #include <filesystem>
 #include <functional>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -43,7 +44,10 @@ struct BuildProgress {
 
 struct BuildOptions {
     std::uint64_t memoryBudgetBytes = 1ull << 30;
-    std::uint32_t pageSize = storage::kDefaultPageSize;
+    /** Bytes per page; empty = auto: chosen after the scan so that whole-page padding stays a
+     *  small share of the file without multiplying the draw commands of instances
+     *  (builder/src/PageSizeChoice.h), at most kDefaultPageSize. */
+    std::optional<std::uint32_t> pageSize;
     /** Worker threads for chunk building; 0 = hardware concurrency. */
     unsigned threads = 0;
     HierarchyParams hierarchy;
@@ -86,7 +90,8 @@ struct BuildReport {
     std::uint64_t spillBytes = 0;          ///< written to temporary run files
     std::uint64_t memoryBudgetBytes = 0;
     std::uint64_t peakRssBytes = 0;        ///< VmHWM of the process at the end
-    std::uint32_t pageSize = 0;
+    std::uint32_t pageSize = 0;            ///< as written (chosen, with auto)
+    bool pageSizeAuto = false;
     unsigned threads = 0;
     std::array<double, 3> origin{}; ///< world position of the file frame's origin
     std::vector<PhaseTime> phases;
