@@ -12,15 +12,17 @@ namespace {
 // single meshes (0.15 taken), each a 96-byte record; an instance is a 96-byte node plus a 56-byte
 // transform, and the instance level above them adds about one cell per seven instances.
 constexpr std::uint64_t kNodeBytesPerHundredTriangles = 15 * sizeof(storage::NodeRecord);
-constexpr std::uint64_t kBytesPerInstance =
-        sizeof(storage::NodeRecord) + sizeof(storage::InstanceRecord) + sizeof(storage::NodeRecord) / 7;
+constexpr std::uint64_t kBytesPerInstance = sizeof(storage::NodeRecord) +
+                                            sizeof(storage::InstanceRecord) +
+                                            sizeof(storage::NodeRecord) / 7;
 
 } // namespace
 
 std::uint64_t estimatePayloadBytes(const PageSizeInputs& inputs) noexcept {
     std::uint64_t bytes = 0;
     for (const PrototypeCount& p : inputs.prototypes) {
-        bytes += p.triangles * sizeof(storage::PackedTriangle) + p.triangles * kNodeBytesPerHundredTriangles / 100;
+        bytes += p.triangles * sizeof(storage::PackedTriangle) +
+                 p.triangles * kNodeBytesPerHundredTriangles / 100;
         bytes += p.triangles > 0 ? p.instances * kBytesPerInstance : 0;
     }
     return bytes;
@@ -28,8 +30,10 @@ std::uint64_t estimatePayloadBytes(const PageSizeInputs& inputs) noexcept {
 
 std::uint64_t fixedPartialPages(const PageSizeInputs& inputs) noexcept {
     constexpr std::uint64_t kHeaderAndTables = 4;
-    const auto stored = std::count_if(inputs.prototypes.begin(), inputs.prototypes.end(),
-                                      [](const PrototypeCount& p) { return p.triangles > 0; });
+    const auto stored = std::count_if(
+            inputs.prototypes.begin(), inputs.prototypes.end(), [](const PrototypeCount& p) {
+                return p.triangles > 0;
+            });
     return kHeaderAndTables + 2 * static_cast<std::uint64_t>(stored);
 }
 

@@ -17,7 +17,8 @@ PageSizeInputs singleMesh(std::uint64_t triangles) {
 }
 
 bool paddingWithinShare(const PageSizeInputs& inputs, std::uint32_t pageSize) {
-    return fixedPartialPages(inputs) * pageSize <= estimatePayloadBytes(inputs) / kPaddingShareDivisor;
+    return fixedPartialPages(inputs) * pageSize <=
+           estimatePayloadBytes(inputs) / kPaddingShareDivisor;
 }
 
 bool drawsWithinAllowance(const PageSizeInputs& inputs, std::uint32_t pageSize) {
@@ -31,9 +32,12 @@ TEST(PageSizeChoiceTest, EstimatesCountTrianglesNodesInstancesAndDraws) {
     EXPECT_EQ(estimatePayloadBytes(uninstanced), 60'000u + 150u * 96u);
     // An instance: its node (96 B), its transform (56 B), a seventh of an instance-level cell.
     const PageSizeInputs instanced{.prototypes = {{.triangles = 1, .instances = 101}}};
-    EXPECT_EQ(estimatePayloadBytes(instanced) - estimatePayloadBytes(singleMesh(1)), 100u * (96u + 56u + 13u));
+    EXPECT_EQ(
+            estimatePayloadBytes(instanced) - estimatePayloadBytes(singleMesh(1)),
+            100u * (96u + 56u + 13u));
     // An empty prototype is not stored: no pages, no payload, no draws.
-    const PageSizeInputs withEmpty{.prototypes = {{.triangles = 1000, .instances = 1}, {.triangles = 0, .instances = 50}}};
+    const PageSizeInputs withEmpty{
+            .prototypes = {{.triangles = 1000, .instances = 1}, {.triangles = 0, .instances = 50}}};
     EXPECT_EQ(estimatePayloadBytes(withEmpty), estimatePayloadBytes(singleMesh(1000)));
     EXPECT_EQ(fixedPartialPages(withEmpty), fixedPartialPages(singleMesh(1000)));
     // 4 KiB pages hold 68 triangles: 800 triangles span 12 pages, drawn by each of 10 instances.
@@ -46,7 +50,8 @@ TEST(PageSizeChoiceTest, SmallModelsGetSmallPagesLargeScenesTheDefault) {
     EXPECT_EQ(choosePageSize(singleMesh(576)), storage::kMinPageSize); // Fox: 41 kB of payload
     EXPECT_EQ(choosePageSize(singleMesh(0)), storage::kMinPageSize);   // nothing to pad against
     EXPECT_EQ(choosePageSize(singleMesh(1'000'000)), storage::kDefaultPageSize);
-    EXPECT_EQ(choosePageSize(singleMesh(4'000'000'000ull)), storage::kDefaultPageSize); // never above
+    EXPECT_EQ(
+            choosePageSize(singleMesh(4'000'000'000ull)), storage::kDefaultPageSize); // never above
 }
 
 // The molecule: 5 spheres of 800 triangles, 6534 instances. Padding alone would pick 4 KiB
@@ -68,10 +73,13 @@ TEST(PageSizeChoiceTest, ChoiceIsTheLargestThatKeepsPaddingAndDrawsWithinBounds)
             for (std::uint64_t instances : {1ull, 30ull, 3'000ull}) {
                 PageSizeInputs inputs;
                 for (std::uint32_t p = 0; p < prototypes; ++p)
-                    inputs.prototypes.push_back({.triangles = triangles / prototypes, .instances = instances});
+                    inputs.prototypes.push_back(
+                            {.triangles = triangles / prototypes, .instances = instances});
                 const std::uint32_t chosen = choosePageSize(inputs);
-                SCOPED_TRACE(testing::Message() << triangles << " triangles, " << prototypes << " prototypes, "
-                                                << instances << " instances each: " << chosen);
+                SCOPED_TRACE(
+                        testing::Message()
+                        << triangles << " triangles, " << prototypes << " prototypes, " << instances
+                        << " instances each: " << chosen);
                 ASSERT_TRUE(storage::isValidPageSize(chosen));
                 ASSERT_LE(chosen, storage::kDefaultPageSize);
                 EXPECT_TRUE(drawsWithinAllowance(inputs, chosen));

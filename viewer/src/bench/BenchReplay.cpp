@@ -66,29 +66,60 @@ Status runReplay(const ReplayParams& p, const Scenario& scenario, const BenchOpt
         }
     } guard{scene};
 
-    std::fprintf(stderr, "%s: building %s\n", name.c_str(),
-                 p.scene.gltf.empty() ? p.scene.generate.c_str() : p.scene.gltf.c_str());
-    FF_ASSIGN_OR_RETURN(const ChildRun build,
-                        buildScene(p.scene, {"--report", report.string()}, scene, options.selfExe));
+    std::fprintf(
+            stderr,
+            "%s: building %s\n",
+            name.c_str(),
+            p.scene.gltf.empty() ? p.scene.generate.c_str() : p.scene.gltf.c_str());
+    FF_ASSIGN_OR_RETURN(
+            const ChildRun build,
+            buildScene(p.scene, {"--report", report.string()}, scene, options.selfExe));
     const nlohmann::json built = readJson(report);
     if (!built.is_object())
         return Status(ErrorCode::Internal, "unreadable build report " + report.string());
 
-    std::vector<std::string> pathArgs = {options.selfExe, "path", p.generator, scene.string(), "-o", path.string(),
-                                         "--frames", std::to_string(p.frames), "--seed", std::to_string(p.seed)};
+    std::vector<std::string> pathArgs = {
+            options.selfExe,
+            "path",
+            p.generator,
+            scene.string(),
+            "-o",
+            path.string(),
+            "--frames",
+            std::to_string(p.frames),
+            "--seed",
+            std::to_string(p.seed)};
     if (p.generator == "teleports")
         pathArgs.insert(pathArgs.end(), {"--teleports", std::to_string(p.teleports)});
     FF_RETURN_IF_ERROR(runChild(pathArgs).status());
 
-    std::fprintf(stderr, "%s: replaying %lld frames through a %lld MiB cache\n", name.c_str(),
-                 static_cast<long long>(p.frames), static_cast<long long>(p.cacheMb));
+    std::fprintf(
+            stderr,
+            "%s: replaying %lld frames through a %lld MiB cache\n",
+            name.c_str(),
+            static_cast<long long>(p.frames),
+            static_cast<long long>(p.cacheMb));
     FF_ASSIGN_OR_RETURN(
             const ChildRun replay,
-            runChild({options.selfExe, "replay", scene.string(), path.string(), "--cache-mb", std::to_string(p.cacheMb),
-                      "--size", std::to_string(p.size[0]) + "x" + std::to_string(p.size[1]), "--io-threads",
-                      std::to_string(p.ioThreads), "--uploads-per-frame", std::to_string(p.uploadsPerFrame),
-                      "--prefetch-frames", std::to_string(p.prefetchFrames), "--csv", frames.string(), "--summary",
-                      summaryPath.string()}));
+            runChild(
+                    {options.selfExe,
+                     "replay",
+                     scene.string(),
+                     path.string(),
+                     "--cache-mb",
+                     std::to_string(p.cacheMb),
+                     "--size",
+                     std::to_string(p.size[0]) + "x" + std::to_string(p.size[1]),
+                     "--io-threads",
+                     std::to_string(p.ioThreads),
+                     "--uploads-per-frame",
+                     std::to_string(p.uploadsPerFrame),
+                     "--prefetch-frames",
+                     std::to_string(p.prefetchFrames),
+                     "--csv",
+                     frames.string(),
+                     "--summary",
+                     summaryPath.string()}));
     const nlohmann::json summary = readJson(summaryPath);
     if (!summary.is_object())
         return Status(ErrorCode::Internal, "unreadable replay summary " + summaryPath.string());
@@ -96,35 +127,67 @@ Status runReplay(const ReplayParams& p, const Scenario& scenario, const BenchOpt
 
     const nlohmann::json& bytes = built["bytes"];
     CsvTable buildTable({"triangles", "file", "spill", "memory_budget", "seconds", "peak_rss"});
-    buildTable.addRow({std::to_string(built.value("instanced_triangles", std::uint64_t{0})), bytesCell(bytes, "file"),
-                       bytesCell(bytes, "spill"), bytesCell(built, "memory_budget_bytes"), formatNumber(build.seconds),
-                       formatBytes(build.peakRssBytes)});
-    CsvTable replayTable({"frames", "p50_ms", "p95_ms", "p99_ms", "bytes_read", "unique_bytes", "budget",
-                          "peak_resident", "peak_rss_anon", "peak_rss_file", "peak_rss (ru_maxrss)", "debt_frames",
-                          "stalled_frames", "max_frames_to_full_quality", "failed_pages"});
-    replayTable.addRow({std::to_string(summary.value("frames", 0)), formatNumber(summary.value("p50_ms", 0.0)),
-                        formatNumber(summary.value("p95_ms", 0.0)), formatNumber(summary.value("p99_ms", 0.0)),
-                        bytesCell(summary, "bytes_read"), bytesCell(summary, "unique_bytes"),
-                        bytesCell(summary, "budget_bytes"), bytesCell(summary, "peak_resident_bytes"),
-                        bytesCell(summary, "peak_rss_anon_bytes"), bytesCell(summary, "peak_rss_file_bytes"),
-                        formatBytes(replay.peakRssBytes), std::to_string(summary.value("debt_frames", 0)),
-                        std::to_string(summary.value("stalled_frames", 0)),
-                        std::to_string(summary.value("max_frames_to_full_quality", 0)),
-                        std::to_string(summary.value("failed_pages", 0))});
+    buildTable.addRow(
+            {std::to_string(built.value("instanced_triangles", std::uint64_t{0})),
+             bytesCell(bytes, "file"),
+             bytesCell(bytes, "spill"),
+             bytesCell(built, "memory_budget_bytes"),
+             formatNumber(build.seconds),
+             formatBytes(build.peakRssBytes)});
+    CsvTable replayTable(
+            {"frames",
+             "p50_ms",
+             "p95_ms",
+             "p99_ms",
+             "bytes_read",
+             "unique_bytes",
+             "budget",
+             "peak_resident",
+             "peak_rss_anon",
+             "peak_rss_file",
+             "peak_rss (ru_maxrss)",
+             "debt_frames",
+             "stalled_frames",
+             "max_frames_to_full_quality",
+             "failed_pages"});
+    replayTable.addRow(
+            {std::to_string(summary.value("frames", 0)),
+             formatNumber(summary.value("p50_ms", 0.0)),
+             formatNumber(summary.value("p95_ms", 0.0)),
+             formatNumber(summary.value("p99_ms", 0.0)),
+             bytesCell(summary, "bytes_read"),
+             bytesCell(summary, "unique_bytes"),
+             bytesCell(summary, "budget_bytes"),
+             bytesCell(summary, "peak_resident_bytes"),
+             bytesCell(summary, "peak_rss_anon_bytes"),
+             bytesCell(summary, "peak_rss_file_bytes"),
+             formatBytes(replay.peakRssBytes),
+             std::to_string(summary.value("debt_frames", 0)),
+             std::to_string(summary.value("stalled_frames", 0)),
+             std::to_string(summary.value("max_frames_to_full_quality", 0)),
+             std::to_string(summary.value("failed_pages", 0))});
 
     std::ofstream md(options.outDir / (name + ".md"));
     md << "# " << scenario.title << "\n\n";
     if (!scenario.description.empty())
         md << scenario.description << "\n\n";
-    md << "`" << options.command << "`: a child `farfield build " << joined(p.scene.buildFlags) << "`, then `farfield path " << p.generator << " --frames " << p.frames << " --seed " << p.seed
-       << "` and a child `farfield replay --cache-mb " << p.cacheMb << "` at " << p.size[0] << "x" << p.size[1]
-       << ", asynchronous. Peak RSS is each child's ru_maxrss; the replay also reports its own peak split into "
+    const std::string buildFlags =
+            p.scene.buildFlags.empty() ? "" : " " + joined(p.scene.buildFlags);
+    const std::string teleports =
+            p.generator == "teleports" ? " --teleports " + std::to_string(p.teleports) : "";
+    md << "`" << options.command << "`: a child `farfield build" << buildFlags
+       << "`, then `farfield path " << p.generator << " --frames " << p.frames << " --seed "
+       << p.seed << teleports << "` and a child `farfield replay --cache-mb " << p.cacheMb
+       << " --uploads-per-frame " << p.uploadsPerFrame << "` at " << p.size[0] << "x" << p.size[1]
+       << ", asynchronous. Peak RSS is each child's ru_maxrss; the replay also reports its own "
+          "peak split into "
        << "anonymous and file-backed pages.\n\n**Build**\n\n"
-       << buildTable.markdown() << "\n**Replay** (per frame: `" << name << ".csv`; summary: `" << name
-       << "-summary.json`)\n\n"
+       << buildTable.markdown() << "\n**Replay** (per frame: `" << name << ".csv`; summary: `"
+       << name << "-summary.json`)\n\n"
        << replayTable.markdown() << "\n![replay timeline](" << name << ".png)\n";
     if (!md)
-        return Status(ErrorCode::IoError, "cannot write " + (options.outDir / (name + ".md")).string());
+        return Status(
+                ErrorCode::IoError, "cannot write " + (options.outDir / (name + ".md")).string());
     std::filesystem::remove(report);
     std::filesystem::remove(path);
     removeWorkFolder(options);
@@ -154,9 +217,12 @@ Result<BenchRun> prepareReplay(const Scenario& scenario) {
     p.uploadsPerFrame = reader.integer("uploads_per_frame", p.uploadsPerFrame);
     p.prefetchFrames = reader.integer("prefetch_frames", p.prefetchFrames);
     if (p.cacheMb < 1 || p.ioThreads < 1 || p.uploadsPerFrame < 1 || p.prefetchFrames < 0)
-        reader.fail("", "cache_mb, io_threads and uploads_per_frame must be >= 1, prefetch_frames >= 0");
+        reader.fail(
+                "",
+                "cache_mb, io_threads and uploads_per_frame must be >= 1, prefetch_frames >= 0");
     FF_RETURN_IF_ERROR(reader.finish());
-    return BenchRun([p, scenario](const BenchOptions& options) { return runReplay(p, scenario, options); });
+    return BenchRun(
+            [p, scenario](const BenchOptions& options) { return runReplay(p, scenario, options); });
 }
 
 } // namespace ff::viewer::bench
