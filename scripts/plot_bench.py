@@ -5,7 +5,7 @@ usage: plot_bench.py {table2|forest|build|paging|views|path|replay} CSV OUTDIR
 
 CSV is OUT/NAME.csv (paging: OUT/NAME-working-set.csv, with OUT/NAME-teleports.csv beside it);
 the charts are OUTDIR/NAME.png (views with a sweep also NAME-sweep.png; paging
-NAME-working-set.png and NAME-teleports.png).
+NAME-working-set.png and NAME-teleports.png; path through a streaming cache also NAME-bytes.png).
 """
 import math
 import csv
@@ -291,6 +291,26 @@ def path(data, out, name):
         ax.legend(fontsize=7)
     fig.tight_layout()
     fig.savefig(out / f"{name}.png", dpi=110)
+
+    if any(number(r.get("bytes_read", "0")) > 0 for r in data):
+        bytes_read(data, methods, out / f"{name}-bytes.png")
+
+
+def bytes_read(data, methods, png):
+    """Error against bytes read: each method's per-frame PSNR against what its cold cache has
+    read so far, so a method that reaches the same quality with fewer bytes lies to the left."""
+    fig, ax = plt.subplots(figsize=(7, 4.5))
+    for i, m in enumerate(methods):
+        sel = [r for r in data if r["method"] == m]
+        ax.plot([number(r["bytes_read"]) / 2**20 for r in sel], capped([number(r["psnr_srgb"]) for r in sel]),
+                ".-", color=f"C{i % 10}", label=m, markersize=3)
+    ax.set_xlabel("MiB read so far (cold cache)")
+    ax.set_ylabel("PSNR against the full reference (dB)")
+    ax.set_title("error against bytes read, one point per frame")
+    ax.grid(True, alpha=0.3)
+    ax.legend(fontsize=8)
+    fig.tight_layout()
+    fig.savefig(png, dpi=110)
 
 
 KINDS = {"table2": table2, "forest": forest, "build": build, "paging": paging, "views": views, "path": path, "replay": replay}

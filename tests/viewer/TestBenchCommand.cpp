@@ -191,6 +191,7 @@ TEST(BenchCommandTest, PathScenarioWritesPerFrameAndSummaryCsvChartAndReport) {
                  "cubes",
                  "nodes_deferred",
                  "resident_bytes",
+                 "bytes_read",
                  "psnr_srgb",
                  "instability"}));
     ASSERT_EQ(frames.size(), 1u + 2 * 3); // two methods, three frames each
@@ -218,7 +219,8 @@ TEST(BenchCommandTest, PathScenarioWritesPerFrameAndSummaryCsvChartAndReport) {
                  "min_psnr",
                  "p50_ms",
                  "p99_ms",
-                 "debt_frames"}));
+                 "debt_frames",
+                 "bytes_read"}));
     EXPECT_EQ(cell(summary, 1, "method"), "faces");
     EXPECT_EQ(cell(summary, 2, "method"), "coarse");
     EXPECT_EQ(cell(summary, 2, "cube_draw"), "points");
@@ -228,10 +230,44 @@ TEST(BenchCommandTest, PathScenarioWritesPerFrameAndSummaryCsvChartAndReport) {
             std::stod(cell(summary, 2, "max_instability")),
             std::stod(cell(summary, 2, "mean_instability")));
 
+    EXPECT_EQ(cell(summary, 1, "bytes_read"), "0") << "every page resident: nothing read";
+
     EXPECT_TRUE(fs::is_regular_file(out / "tiny-path.png"));
+    EXPECT_FALSE(fs::exists(out / "tiny-path-bytes.png")) << "no bytes-read chart without streaming";
     const std::string md = readText(out / "tiny-path.md");
     EXPECT_NE(md.find("# A tiny path scenario"), std::string::npos) << md;
     EXPECT_NE(md.find("](tiny-path.png)"), std::string::npos) << md;
+}
+
+// Through a cold cache each method's reads add up frame by frame, and the report charts its
+// error against them.
+TEST(BenchCommandTest, StreamingPathScenarioChartsErrorAgainstBytesRead) {
+    const fs::path dir = freshTestDir();
+    std::string scenario = kPathScenario;
+    scenario.replace(scenario.rfind('}'), 1, R"(, "cache_mb": 4, "uploads_per_frame": 4})");
+    writeText(dir / "tiny-path.json", scenario);
+    const fs::path out = dir / "out";
+    const ProcessResult r =
+            runFarfield({"bench", (dir / "tiny-path.json").string(), "--out", out.string()}, dir);
+    ASSERT_EQ(r.exitCode, 0) << r.describe();
+
+    const std::vector<Row> frames = readCsv(out / "tiny-path.csv");
+    ASSERT_EQ(frames.size(), 1u + 2 * 3);
+    const std::vector<Row> summary = readCsv(out / "tiny-path-summary.csv");
+    ASSERT_EQ(summary.size(), 3u);
+    for (std::size_t method = 0; method < 2; ++method) {
+        SCOPED_TRACE("method " + std::to_string(method));
+        std::uint64_t previous = 0;
+        for (std::size_t f = 0; f < 3; ++f) {
+            const std::uint64_t read = std::stoull(cell(frames, 1 + method * 3 + f, "bytes_read"));
+            EXPECT_GE(read, previous) << "cumulative";
+            previous = read;
+        }
+        EXPECT_GT(previous, 0u);
+        EXPECT_EQ(cell(summary, 1 + method, "bytes_read"), std::to_string(previous));
+    }
+    EXPECT_TRUE(fs::is_regular_file(out / "tiny-path-bytes.png"));
+    EXPECT_NE(readText(out / "tiny-path.md").find("](tiny-path-bytes.png)"), std::string::npos);
 }
 
 constexpr const char* kReplayScenario = R"({

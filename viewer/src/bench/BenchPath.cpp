@@ -145,6 +145,7 @@ Status runPath(const PathParams& p, const Scenario& scenario, const BenchOptions
              "cubes",
              "nodes_deferred",
              "resident_bytes",
+             "bytes_read",
              "psnr_srgb",
              "instability"});
     CsvTable summary(
@@ -161,7 +162,8 @@ Status runPath(const PathParams& p, const Scenario& scenario, const BenchOptions
              "min_psnr",
              "p50_ms",
              "p99_ms",
-             "debt_frames"});
+             "debt_frames",
+             "bytes_read"});
     for (const MethodSpec& method : p.methods) {
         std::fprintf(stderr, "%s: method %s\n", scenario.name.c_str(), method.label.c_str());
         FF_ASSIGN_OR_RETURN(MethodPages pages, openPages(p, *file, scenePath));
@@ -215,6 +217,7 @@ Status runPath(const PathParams& p, const Scenario& scenario, const BenchOptions
                      std::to_string(frame.stats.cubesDrawn),
                      std::to_string(frame.stats.nodesDeferred),
                      std::to_string(pageCache ? pageCache->stats().residentBytes : 0),
+                     std::to_string(pageCache ? pageCache->stats().bytesRead : 0),
                      formatNumber(color.psnrSrgb, 3),
                      pairCell});
             previous = std::move(frame.image);
@@ -234,7 +237,8 @@ Status runPath(const PathParams& p, const Scenario& scenario, const BenchOptions
                  formatNumber(*std::min_element(psnr.begin(), psnr.end()), 3),
                  formatNumber(percentile(frameMs, 0.50), 3),
                  formatNumber(percentile(frameMs, 0.99), 3),
-                 std::to_string(debtFrames)});
+                 std::to_string(debtFrames),
+                 std::to_string(pageCache ? pageCache->stats().bytesRead : 0)});
     }
     file.reset();
 
@@ -263,6 +267,8 @@ Status runPath(const PathParams& p, const Scenario& scenario, const BenchOptions
        << ".csv`.\n\n"
        << summary.markdown() << "\n![instability and PSNR per frame](" << scenario.name
        << ".png)\n";
+    if (p.cacheMb > 0)
+        md << "\n![PSNR against bytes read](" << scenario.name << "-bytes.png)\n";
     if (!md)
         return Status(
                 ErrorCode::IoError,
