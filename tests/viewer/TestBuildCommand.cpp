@@ -140,8 +140,9 @@ TEST(BuildCommandTest, SameInputGivesByteIdenticalFiles) {
             {(kData / "static/CesiumMilkTruck/glTF-Binary/CesiumMilkTruck.glb").string()},
     };
     for (std::size_t i = 0; i < inputs.size(); ++i) {
-        const fs::path a = dir / ("a" + std::to_string(i) + ".ffs");
-        const fs::path b = dir / ("b" + std::to_string(i) + ".ffs");
+        const std::string suffix = std::to_string(i) + ".ffs"; // no "a" + string: GCC 12 -Wrestrict
+        const fs::path a = dir / ("a" + suffix);
+        const fs::path b = dir / ("b" + suffix);
         const ProcessResult first = build(dir, inputs[i], a);
         const ProcessResult second = build(dir, inputs[i], b);
         ASSERT_TRUE(exitedWith(first, 0)) << first.describe();

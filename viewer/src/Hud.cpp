@@ -56,11 +56,18 @@ GLuint compile(GLenum type, const char* source, std::string& log) {
     return shader;
 }
 
+// Appends rather than inserting: GCC 12 reports a false -Wrestrict (its bug 105329) for
+// std::string::insert once inlined in a Release build.
 std::string withThousands(std::uint64_t value) {
-    std::string digits = std::to_string(value);
-    for (int i = static_cast<int>(digits.size()) - 3; i > 0; i -= 3)
-        digits.insert(static_cast<std::size_t>(i), ",");
-    return digits;
+    const std::string digits = std::to_string(value);
+    std::string out;
+    out.reserve(digits.size() + digits.size() / 3);
+    for (std::size_t i = 0; i < digits.size(); ++i) {
+        if (i > 0 && (digits.size() - i) % 3 == 0)
+            out += ',';
+        out += digits[i];
+    }
+    return out;
 }
 
 } // namespace

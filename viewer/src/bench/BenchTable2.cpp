@@ -68,9 +68,15 @@ Status runTable2(const Table2Params& p, const Scenario& scenario, const BenchOpt
             FF_ASSIGN_OR_RETURN(const runtime::CoverageError fullHoles, runtime::coverageError(fullFrame.image, reference.image));
             std::string perLevel;
             for (std::size_t l = 0; l < hierFrame.stats.cubeFacesPerLevel.size(); ++l)
-                if (hierFrame.stats.cubeFacesPerLevel[l] > 0)
-                    perLevel += (perLevel.empty() ? "" : " ") + std::string("L") + std::to_string(l) + ":" +
-                                std::to_string(hierFrame.stats.cubeFacesPerLevel[l]);
+                if (hierFrame.stats.cubeFacesPerLevel[l] > 0) {
+                    // Appended piece by piece: GCC 12's false -Wrestrict (bug 105329) in Release.
+                    if (!perLevel.empty())
+                        perLevel += ' ';
+                    perLevel += 'L';
+                    perLevel += std::to_string(l);
+                    perLevel += ':';
+                    perLevel += std::to_string(hierFrame.stats.cubeFacesPerLevel[l]);
+                }
             table.addRow({std::to_string(size[0]), std::to_string(size[1]), formatNumber(d),
                           formatNumber(fullFrame.stats.totalMs), formatNumber(hierFrame.stats.totalMs),
                           formatNumber(fullFrame.stats.totalMs / hierFrame.stats.totalMs),
