@@ -130,14 +130,8 @@ Result<GeneratorReport> runBlinds(const GeneratorSpec& spec, ISceneSink& sink) {
         box.center = glm::vec3(0.0f, static_cast<float>(offset), 0.0f);
         FF_RETURN_IF_ERROR(emitBox(box, p.segments, kSlabColors[k % kSlabColors.size()], out));
     }
-    FF_RETURN_IF_ERROR(out.flush());
+    FF_ASSIGN_OR_RETURN(const GeneratorReport report, flushSingleMesh(out));
     FF_RETURN_IF_ERROR(sink.addInstance(prototype, glm::dmat4(1.0)));
-
-    GeneratorReport report;
-    report.storedTriangles = out.added();
-    report.triangles = report.storedTriangles;
-    report.prototypes = 1;
-    report.instances = 1;
     FF_ASSERT(report.storedTriangles == p.slabs * p.trianglesPerSlab());
     return report;
 }

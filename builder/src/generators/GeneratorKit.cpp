@@ -178,6 +178,16 @@ Status TriangleBatcher::flush() {
     return Status::ok();
 }
 
+Result<GeneratorReport> flushSingleMesh(TriangleBatcher& out) {
+    FF_RETURN_IF_ERROR(out.flush());
+    GeneratorReport report;
+    report.storedTriangles = out.added();
+    report.triangles = report.storedTriangles;
+    report.prototypes = 1;
+    report.instances = 1;
+    return report;
+}
+
 glm::mat4 makeTransform(const glm::vec3& translation, double yawTurns, float scale) noexcept {
     const SinCos r = sinCosTurns(yawTurns);
     const float c = static_cast<float>(r.cos) * scale;

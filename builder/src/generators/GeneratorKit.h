@@ -173,6 +173,9 @@ private:
     std::uint64_t mSent = 0;
 };
 
+/** Flushes `out` and reports a scene of that one prototype drawn once (the terrain, the blinds,
+ *  the sphere); the caller adds its instance. */
+[[nodiscard]] Result<GeneratorReport> flushSingleMesh(TriangleBatcher& out);
 
 /** Column-major affine transform: translate(t) * rotateY(turns) * scale(s). */
 glm::mat4 makeTransform(const glm::vec3& translation, double yawTurns, float scale) noexcept;

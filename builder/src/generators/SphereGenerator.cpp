@@ -76,14 +76,8 @@ Result<GeneratorReport> runSphere(const GeneratorSpec& spec, ISceneSink& sink) {
                 FF_RETURN_IF_ERROR(out.add(a, d, c));
         }
     }
-    FF_RETURN_IF_ERROR(out.flush());
+    FF_ASSIGN_OR_RETURN(const GeneratorReport report, flushSingleMesh(out));
     FF_RETURN_IF_ERROR(sink.addInstance(prototype, glm::dmat4(1.0)));
-
-    GeneratorReport report;
-    report.storedTriangles = out.added();
-    report.triangles = report.storedTriangles;
-    report.prototypes = 1;
-    report.instances = 1;
     FF_ASSERT(report.storedTriangles == 2 * p.segments * (p.rings - 1));
     return report;
 }

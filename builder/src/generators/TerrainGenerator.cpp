@@ -235,13 +235,7 @@ Result<GeneratorReport> runTerrain(const GeneratorSpec& spec, ISceneSink& sink) 
         }
         std::swap(below, above);
     }
-    FF_RETURN_IF_ERROR(out.flush());
-
-    GeneratorReport report;
-    report.storedTriangles = out.added();
-    report.triangles = report.storedTriangles;
-    report.prototypes = 1;
-    report.instances = 1;
+    FF_ASSIGN_OR_RETURN(const GeneratorReport report, flushSingleMesh(out));
     FF_ASSERT(report.storedTriangles == 2 * grid.columns * grid.rows);
     return report;
 }

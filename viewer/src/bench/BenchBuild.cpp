@@ -47,10 +47,7 @@ Status runBuild(const BuildParams& p, const Scenario& scenario, const BenchOptio
         FF_ASSIGN_OR_RETURN(const ChildRun run,
                             runChild({options.selfExe, "build", "--generate", "terrain:triangles=" + std::to_string(step.triangles),
                                       "-o", scene.string(), "--memory-budget", step.budget, "--report", report.string(), "-q"}));
-        std::ifstream in(report);
-        const nlohmann::json json = nlohmann::json::parse(in, nullptr, false);
-        if (!json.is_object())
-            return Status(ErrorCode::Internal, "unreadable build report " + report.string());
+        FF_ASSIGN_OR_RETURN(const nlohmann::json json, readJsonObject(report, "build report"));
         const auto triangles = json.value("input_triangles", std::uint64_t{0});
         const auto budgetBytes = json.value("memory_budget_bytes", std::uint64_t{0});
         const double rate = static_cast<double>(triangles) / run.seconds;

@@ -15,11 +15,6 @@ namespace ff::viewer::bench {
 
 namespace {
 
-nlohmann::json readJson(const std::filesystem::path& path) {
-    std::ifstream in(path);
-    return nlohmann::json::parse(in, nullptr, false);
-}
-
 struct PagingParams {
     // Working set: forests and terrains of these sizes, one complete (--sync) frame each.
     std::vector<std::int64_t> forestTrees = {1, 4, 16, 64, 256, 1024, 4096, 16384};
@@ -64,10 +59,8 @@ Status runPaging(const PagingParams& p, const Scenario& scenario, const BenchOpt
         FF_RETURN_IF_ERROR(runChild({ff, "replay", scene.string(), path.string(), "--sync", "--cache-mb", std::to_string(p.workingSetCacheMb),
                                      "--summary", summary.string()})
                                    .status());
-        const nlohmann::json report = readJson(work / "report.json");
-        const nlohmann::json s = readJson(summary);
-        if (!report.is_object() || !s.is_object())
-            return Status(ErrorCode::Internal, "unreadable child report for " + step.spec);
+        FF_ASSIGN_OR_RETURN(const nlohmann::json report, readJsonObject(work / "report.json", "build report"));
+        FF_ASSIGN_OR_RETURN(const nlohmann::json s, readJsonObject(summary, "replay summary"));
         workingSet.addRow({step.family, step.spec, std::to_string(report.value("instanced_triangles", std::uint64_t{0})),
                            std::to_string(report["bytes"].value("file", std::uint64_t{0})),
                            std::to_string(s.value("peak_resident_bytes", std::uint64_t{0})),
@@ -97,7 +90,7 @@ Status runPaging(const PagingParams& p, const Scenario& scenario, const BenchOpt
                                .status());
     FF_RETURN_IF_ERROR(plotCharts("paging", workingSetCsv, options.outDir));
 
-    const nlohmann::json t = readJson(teleportSummary);
+    FF_ASSIGN_OR_RETURN(const nlohmann::json t, readJsonObject(teleportSummary, "replay summary"));
     std::ofstream md(options.outDir / (prefix + ".md"));
     md << "# " << scenario.title << "\n\n";
     if (!scenario.description.empty())

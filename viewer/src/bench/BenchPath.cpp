@@ -34,8 +34,7 @@ namespace {
 struct PathParams {
     SceneSpec scene;
     std::array<int, 2> size = {640, 480};
-    std::string generator = "orbit";
-    runtime::PathGeneratorOptions path;
+    PathSpec path;
     int supersample = 1;
     std::vector<MethodSpec> methods;
     /** 0: every page resident (memory map); else a cold streaming cache of this many MiB. */
@@ -53,12 +52,12 @@ double percentile(std::vector<double> values, double p) {
     return values[std::min(index == 0 ? 0 : index - 1, values.size() - 1)];
 }
 
-Result<runtime::CameraPath> makePath(const PathParams& p, const runtime::Bounds& bounds) {
+Result<runtime::CameraPath> makePath(const PathSpec& p, const runtime::Bounds& bounds) {
     if (p.generator == "flythrough")
-        return runtime::makeFlythroughPath(bounds, p.path);
+        return runtime::makeFlythroughPath(bounds, p.options);
     if (p.generator == "teleports")
-        return runtime::makeTeleportPath(bounds, p.path);
-    return runtime::makeOrbitPath(bounds, p.path);
+        return runtime::makeTeleportPath(bounds, p.options);
+    return runtime::makeOrbitPath(bounds, p.options);
 }
 
 /** The pages a method draws from: the memory map, or a cold streaming cache. */
@@ -101,7 +100,7 @@ Status runPath(const PathParams& p, const Scenario& scenario, const BenchOptions
             buildScene(p.scene, {}, scenePath, options.selfExe).status().withContext(scenario.where()));
     FF_ASSIGN_OR_RETURN(auto file, storage::SceneFile::open(scenePath));
     const runtime::Bounds bounds = sceneBounds(*file);
-    auto path = makePath(p, bounds);
+    auto path = makePath(p.path, bounds);
     if (!path)
         return path.status().withContext(scenario.where() + ": path");
     const std::int64_t frames = path->frameCount();
@@ -254,7 +253,7 @@ Status runPath(const PathParams& p, const Scenario& scenario, const BenchOptions
        << "Scene: "
        << (p.scene.gltf.empty() ? "`--generate " + p.scene.generate + "`"
                                 : "`" + p.scene.gltf + "`")
-       << ". Path: `farfield path " << p.generator << "`, " << frames << " frames at " << width
+       << ". Path: `farfield path " << p.path.generator << "`, " << frames << " frames at " << width
        << "x" << height << ". Pages: "
        << (p.cacheMb == 0
                    ? std::string("all resident")
@@ -284,27 +283,10 @@ Result<BenchRun> preparePath(const Scenario& scenario) {
     ScenarioReader reader = readScenario(scenario);
     p.scene = readSceneSpec(reader);
     p.size = reader.size("size", p.size);
-    ScenarioReader path = reader.object("path");
     if (!reader.has("path"))
         reader.fail("path", "missing: e.g. {\"generator\": \"orbit\", \"frames\": 60}");
-    p.generator = path.choice("generator", p.generator, {"orbit", "flythrough", "teleports"});
-    p.path.frames = path.integer("frames", p.path.frames);
-    p.path.fps = path.number("fps", p.path.fps);
-    const std::int64_t seed = path.integer("seed", 1);
-    p.path.seed = static_cast<std::uint64_t>(std::max<std::int64_t>(0, seed));
-    p.path.teleports = path.integer("teleports", p.path.teleports);
-    p.path.fovDegrees = path.number("fov", p.path.fovDegrees);
-    if (p.path.frames < 2)
-        path.fail("frames", "needs at least 2 frames (instability compares consecutive frames)");
-    if (seed < 0)
-        path.fail("seed", "must be >= 0");
-    if (!(p.path.fps > 0.0))
-        path.fail("fps", "must be positive");
-    if (!(p.path.fovDegrees > 0.0 && p.path.fovDegrees < 179.0))
-        path.fail("fov", "must be between 0 and 179 degrees");
-    if (p.generator == "teleports" &&
-        (p.path.teleports < 1 || p.path.frames < 2 * p.path.teleports))
-        path.fail("teleports", "needs teleports >= 1 and frames >= 2 * teleports");
+    // At least 2 frames: instability compares consecutive frames.
+    p.path = readPathSpec(reader, p.path, 2);
     p.supersample = readReferenceSupersample(reader, p.supersample);
     p.methods = readMethods(reader);
     p.cacheMb = reader.integer("cache_mb", p.cacheMb);

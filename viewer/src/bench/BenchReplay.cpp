@@ -21,21 +21,13 @@ namespace {
 
 struct ReplayParams {
     SceneSpec scene;
-    std::string generator = "flythrough";
-    std::int64_t frames = 300;
-    std::int64_t seed = 1;
-    std::int64_t teleports = 8;
+    PathSpec path = {.generator = "flythrough", .options = {}};
     std::array<int, 2> size = {640, 480};
     std::int64_t cacheMb = 512;
     std::int64_t ioThreads = 2;
     std::int64_t uploadsPerFrame = 64;
     std::int64_t prefetchFrames = 4;
 };
-
-nlohmann::json readJson(const std::filesystem::path& path) {
-    std::ifstream in(path);
-    return nlohmann::json::parse(in, nullptr, false);
-}
 
 std::string joined(const std::vector<std::string>& words) {
     std::string text;
@@ -74,30 +66,17 @@ Status runReplay(const ReplayParams& p, const Scenario& scenario, const BenchOpt
     FF_ASSIGN_OR_RETURN(
             const ChildRun build,
             buildScene(p.scene, {"--report", report.string()}, scene, options.selfExe));
-    const nlohmann::json built = readJson(report);
-    if (!built.is_object())
-        return Status(ErrorCode::Internal, "unreadable build report " + report.string());
+    FF_ASSIGN_OR_RETURN(const nlohmann::json built, readJsonObject(report, "build report"));
 
-    std::vector<std::string> pathArgs = {
-            options.selfExe,
-            "path",
-            p.generator,
-            scene.string(),
-            "-o",
-            path.string(),
-            "--frames",
-            std::to_string(p.frames),
-            "--seed",
-            std::to_string(p.seed)};
-    if (p.generator == "teleports")
-        pathArgs.insert(pathArgs.end(), {"--teleports", std::to_string(p.teleports)});
+    std::vector<std::string> pathArgs = p.path.commandArgs(scene, path);
+    pathArgs.insert(pathArgs.begin(), options.selfExe);
     FF_RETURN_IF_ERROR(runChild(pathArgs).status());
 
     std::fprintf(
             stderr,
             "%s: replaying %lld frames through a %lld MiB cache\n",
             name.c_str(),
-            static_cast<long long>(p.frames),
+            static_cast<long long>(p.path.options.frames),
             static_cast<long long>(p.cacheMb));
     FF_ASSIGN_OR_RETURN(
             const ChildRun replay,
@@ -120,9 +99,7 @@ Status runReplay(const ReplayParams& p, const Scenario& scenario, const BenchOpt
                      frames.string(),
                      "--summary",
                      summaryPath.string()}));
-    const nlohmann::json summary = readJson(summaryPath);
-    if (!summary.is_object())
-        return Status(ErrorCode::Internal, "unreadable replay summary " + summaryPath.string());
+    FF_ASSIGN_OR_RETURN(const nlohmann::json summary, readJsonObject(summaryPath, "replay summary"));
     FF_RETURN_IF_ERROR(plotCharts("replay", frames, options.outDir));
 
     const nlohmann::json& bytes = built["bytes"];
@@ -173,11 +150,9 @@ Status runReplay(const ReplayParams& p, const Scenario& scenario, const BenchOpt
         md << scenario.description << "\n\n";
     const std::string buildFlags =
             p.scene.buildFlags.empty() ? "" : " " + joined(p.scene.buildFlags);
-    const std::string teleports =
-            p.generator == "teleports" ? " --teleports " + std::to_string(p.teleports) : "";
     md << "`" << options.command << "`: a child `farfield build" << buildFlags
-       << "`, then `farfield path " << p.generator << " --frames " << p.frames << " --seed "
-       << p.seed << teleports << "` and a child `farfield replay --cache-mb " << p.cacheMb
+       << "`, then `farfield " << joined(p.path.commandArgs("SCENE", "PATH.json"))
+       << "` and a child `farfield replay --cache-mb " << p.cacheMb
        << " --uploads-per-frame " << p.uploadsPerFrame << "` at " << p.size[0] << "x" << p.size[1]
        << ", asynchronous. Peak RSS is each child's ru_maxrss; the replay also reports its own "
           "peak split into "
@@ -201,17 +176,7 @@ Result<BenchRun> prepareReplay(const Scenario& scenario) {
     ScenarioReader reader = readScenario(scenario);
     p.scene = readSceneSpec(reader);
     p.size = reader.size("size", p.size);
-    ScenarioReader path = reader.object("path");
-    p.generator = path.choice("generator", p.generator, {"orbit", "flythrough", "teleports"});
-    p.frames = path.integer("frames", p.frames);
-    p.seed = path.integer("seed", p.seed);
-    p.teleports = path.integer("teleports", p.teleports);
-    if (p.frames < 1)
-        path.fail("frames", "must be >= 1");
-    if (p.seed < 0)
-        path.fail("seed", "must be >= 0");
-    if (p.generator == "teleports" && (p.teleports < 1 || p.frames < 2 * p.teleports))
-        path.fail("teleports", "needs teleports >= 1 and frames >= 2 * teleports");
+    p.path = readPathSpec(reader, p.path, 1);
     p.cacheMb = reader.integer("cache_mb", p.cacheMb);
     p.ioThreads = reader.integer("io_threads", p.ioThreads);
     p.uploadsPerFrame = reader.integer("uploads_per_frame", p.uploadsPerFrame);

@@ -169,4 +169,12 @@ Status plotCharts(const std::string& kind, const std::filesystem::path& csv, con
     return Status::ok();
 }
 
+Result<nlohmann::json> readJsonObject(const std::filesystem::path& path, const char* what) {
+    std::ifstream in(path);
+    nlohmann::json json = nlohmann::json::parse(in, nullptr, false);
+    if (!json.is_object())
+        return Status(ErrorCode::Internal, std::string("unreadable ") + what + " " + path.string());
+    return json;
+}
+
 } // namespace ff::viewer::bench

@@ -4,6 +4,8 @@
 #include <ff/runtime/FrameRenderer.h>
 #include <ff/storage/Status.h>
 
+#include <nlohmann/json.hpp>
+
 #include <cstdint>
 #include <filesystem>
 #include <string>
@@ -37,6 +39,10 @@ std::string formatNumber(double value, int decimals = 2);
         int height,
         int warmup,
         int timed);
+
+/** A JSON object written by a child (a build report, a replay summary); Internal error naming
+ *  `what` and the path if the file is missing or not an object. */
+[[nodiscard]] Result<nlohmann::json> readJsonObject(const std::filesystem::path& path, const char* what);
 
 /** A finished child process. */
 struct ChildRun {

@@ -46,6 +46,41 @@ Result<ChildRun> buildScene(
     return runChild(argv);
 }
 
+std::vector<std::string> PathSpec::commandArgs(
+        const std::filesystem::path& scene, const std::filesystem::path& output) const {
+    std::vector<std::string> args = {"path", generator, scene.string(), "-o", output.string(),
+                                     "--frames", std::to_string(options.frames), "--fps",
+                                     sweepValueText(options.fps), "--seed", std::to_string(options.seed),
+                                     "--fov", sweepValueText(options.fovDegrees)};
+    if (generator == "teleports")
+        args.insert(args.end(), {"--teleports", std::to_string(options.teleports)});
+    return args;
+}
+
+PathSpec readPathSpec(ScenarioReader& reader, PathSpec fallback, std::int64_t minFrames) {
+    PathSpec p = std::move(fallback);
+    ScenarioReader path = reader.object("path");
+    p.generator = path.choice("generator", p.generator, {"orbit", "flythrough", "teleports"});
+    p.options.frames = path.integer("frames", p.options.frames);
+    p.options.fps = path.number("fps", p.options.fps);
+    const std::int64_t seed = path.integer("seed", static_cast<std::int64_t>(p.options.seed));
+    p.options.seed = static_cast<std::uint64_t>(std::max<std::int64_t>(0, seed));
+    p.options.teleports = path.integer("teleports", p.options.teleports);
+    p.options.fovDegrees = path.number("fov", p.options.fovDegrees);
+    if (p.options.frames < minFrames)
+        path.fail("frames", "must be >= " + std::to_string(minFrames));
+    if (seed < 0)
+        path.fail("seed", "must be >= 0");
+    if (!(p.options.fps > 0.0))
+        path.fail("fps", "must be positive");
+    if (!(p.options.fovDegrees > 0.0 && p.options.fovDegrees < 179.0))
+        path.fail("fov", "must be between 0 and 179 degrees");
+    if (p.generator == "teleports" &&
+        (p.options.teleports < 1 || p.options.frames < 2 * p.options.teleports))
+        path.fail("teleports", "needs teleports >= 1 and frames >= 2 * teleports");
+    return p;
+}
+
 const char* MethodSpec::methodName() const noexcept {
     return isFull() ? "full" : "hierarchical";
 }

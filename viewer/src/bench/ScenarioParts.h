@@ -6,6 +6,7 @@
 #include "BenchSupport.h"
 #include "Scenario.h"
 
+#include <ff/runtime/CameraPathGenerators.h>
 #include <ff/runtime/Selection.h>
 #include <ff/storage/Status.h>
 
@@ -36,6 +37,19 @@ SceneSpec readSceneSpec(ScenarioReader& reader);
         const std::vector<std::string>& extraFlags,
         const std::filesystem::path& output,
         const std::string& selfExe);
+
+/** "path": a camera path made by one of `farfield path`'s generators, fitted to the scene. */
+struct PathSpec {
+    std::string generator = "orbit"; ///< orbit, flythrough or teleports
+    runtime::PathGeneratorOptions options;
+
+    /** `farfield path` arguments (after the executable) that write this path for `scene`. */
+    std::vector<std::string> commandArgs(const std::filesystem::path& scene, const std::filesystem::path& output) const;
+};
+
+/** Reads "path" ({generator, frames, fps, seed, teleports, fov}) over `fallback`; frames must be
+ *  at least `minFrames`. Errors go to the reader. */
+PathSpec readPathSpec(ScenarioReader& reader, PathSpec fallback, std::int64_t minFrames);
 
 /** One method compared: a label and the selection options its keys set. */
 struct MethodSpec {
