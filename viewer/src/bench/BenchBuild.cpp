@@ -9,7 +9,6 @@
 
 #include <chrono>
 #include <cstdio>
-#include <fstream>
 #include <sys/resource.h>
 #include <sys/wait.h>
 #include <thread>
@@ -63,13 +62,12 @@ Status runBuild(const BuildParams& p, const Scenario& scenario, const BenchOptio
     const std::filesystem::path csv = options.outDir / (scenario.name + ".csv");
     FF_RETURN_IF_ERROR(table.write(csv));
     FF_RETURN_IF_ERROR(plotCharts("build", csv, options.outDir));
-    std::ofstream md(options.outDir / (scenario.name + ".md"));
-    md << "# " << scenario.title << "\n\n";
-    if (!scenario.description.empty())
-        md << scenario.description << "\n\n";
+    ReportFile mdFile(options.outDir, scenario.name, scenario.title, scenario.description);
+    std::ostream& md = mdFile.stream();
     md << "`" << options.command << "`: `farfield build --generate terrain:triangles=N` end to end (generate, spill, "
        << "partition, octree, cubes, write, fsync) on " << cores << " cores; peak RSS is the child's ru_maxrss.\n\n"
        << table.markdown() << "\n![throughput and memory](" << scenario.name << ".png)\n";
+    FF_RETURN_IF_ERROR(mdFile.close());
     removeWorkFolder(options);
     return Status::ok();
 }

@@ -8,7 +8,6 @@
 
 #include <array>
 #include <cstdio>
-#include <fstream>
 #include <string>
 #include <vector>
 
@@ -92,10 +91,8 @@ Status runForest(const ForestParams& p, const Scenario& scenario, const BenchOpt
     std::string sizes;
     for (const auto& size : p.sizes)
         sizes += (sizes.empty() ? "" : " and ") + std::to_string(size[0]) + "x" + std::to_string(size[1]);
-    std::ofstream md(options.outDir / (scenario.name + ".md"));
-    md << "# " << scenario.title << "\n\n";
-    if (!scenario.description.empty())
-        md << scenario.description << "\n\n";
+    ReportFile mdFile(options.outDir, scenario.name, scenario.title, scenario.description);
+    std::ostream& md = mdFile.stream();
     md << "`" << options.command << "`: forests of " << p.trees.front() << " to " << p.trees.back()
        << " trees (one ~52.6k-triangle prototype plus one "
        << "transform per tree), one viewpoint fixed at the forest's corner looking diagonally into it and over it to the horizon, at "
@@ -104,6 +101,7 @@ Status runForest(const ForestParams& p, const Scenario& scenario, const BenchOpt
        << " M triangles and extrapolated above that from the measured per-triangle cost (full_measured = 0). "
        << "Chamberlain et al. report an 88x speedup at 16,384 trees (859 M polygons).\n\n"
        << table.markdown() << "\n![frame time against scene size](" << scenario.name << ".png)\n";
+    FF_RETURN_IF_ERROR(mdFile.close());
     removeWorkFolder(options);
     return Status::ok();
 }

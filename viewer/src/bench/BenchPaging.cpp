@@ -9,7 +9,6 @@
 #include <nlohmann/json.hpp>
 
 #include <cstdio>
-#include <fstream>
 
 namespace ff::viewer::bench {
 
@@ -91,10 +90,8 @@ Status runPaging(const PagingParams& p, const Scenario& scenario, const BenchOpt
     FF_RETURN_IF_ERROR(plotCharts("paging", workingSetCsv, options.outDir));
 
     FF_ASSIGN_OR_RETURN(const nlohmann::json t, readJsonObject(teleportSummary, "replay summary"));
-    std::ofstream md(options.outDir / (prefix + ".md"));
-    md << "# " << scenario.title << "\n\n";
-    if (!scenario.description.empty())
-        md << scenario.description << "\n\n";
+    ReportFile mdFile(options.outDir, prefix, scenario.title, scenario.description);
+    std::ostream& md = mdFile.stream();
     md << "`" << options.command << "`. **Working set**: the bytes resident for one complete frame (`replay --sync`, "
        << "epsilon = 1, 640x480, the first frame of `farfield path orbit`: the same view in scene radii for every "
        << "size) against scene size.\n\n"
@@ -102,6 +99,7 @@ Status runPaging(const PagingParams& p, const Scenario& scenario, const BenchOpt
        << "**Teleports**: " << teleports << " jumps across `" << terrain << "` with a cold " << p.teleportCacheMb
        << " MiB cache, asynchronous (`" << prefix << "-teleports.csv` per frame, summary below).\n\n```json\n"
        << t.dump(2) << "\n```\n\n![teleport timeline](" << prefix << "-teleports.png)\n";
+    FF_RETURN_IF_ERROR(mdFile.close());
     removeWorkFolder(options);
     return Status::ok();
 }

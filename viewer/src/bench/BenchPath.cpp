@@ -21,7 +21,6 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
-#include <fstream>
 #include <memory>
 #include <optional>
 #include <string>
@@ -245,10 +244,8 @@ Status runPath(const PathParams& p, const Scenario& scenario, const BenchOptions
     FF_RETURN_IF_ERROR(perFrame.write(csv));
     FF_RETURN_IF_ERROR(summary.write(options.outDir / (scenario.name + "-summary.csv")));
     FF_RETURN_IF_ERROR(plotCharts("path", csv, options.outDir));
-    std::ofstream md(options.outDir / (scenario.name + ".md"));
-    md << "# " << scenario.title << "\n\n";
-    if (!scenario.description.empty())
-        md << scenario.description << "\n\n";
+    ReportFile mdFile(options.outDir, scenario.name, scenario.title, scenario.description);
+    std::ostream& md = mdFile.stream();
     md << "Command: `" << options.command << "`\n\n"
        << "Scene: "
        << (p.scene.gltf.empty() ? "`--generate " + p.scene.generate + "`"
@@ -268,10 +265,7 @@ Status runPath(const PathParams& p, const Scenario& scenario, const BenchOptions
        << ".png)\n";
     if (p.cacheMb > 0)
         md << "\n![PSNR against bytes read](" << scenario.name << "-bytes.png)\n";
-    if (!md)
-        return Status(
-                ErrorCode::IoError,
-                "cannot write " + (options.outDir / (scenario.name + ".md")).string());
+    FF_RETURN_IF_ERROR(mdFile.close());
     removeWorkFolder(options);
     return Status::ok();
 }

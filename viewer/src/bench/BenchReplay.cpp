@@ -13,7 +13,6 @@
 #include <nlohmann/json.hpp>
 
 #include <cstdio>
-#include <fstream>
 
 namespace ff::viewer::bench {
 
@@ -144,10 +143,8 @@ Status runReplay(const ReplayParams& p, const Scenario& scenario, const BenchOpt
              std::to_string(summary.value("max_frames_to_full_quality", 0)),
              std::to_string(summary.value("failed_pages", 0))});
 
-    std::ofstream md(options.outDir / (name + ".md"));
-    md << "# " << scenario.title << "\n\n";
-    if (!scenario.description.empty())
-        md << scenario.description << "\n\n";
+    ReportFile mdFile(options.outDir, name, scenario.title, scenario.description);
+    std::ostream& md = mdFile.stream();
     const std::string buildFlags =
             p.scene.buildFlags.empty() ? "" : " " + joined(p.scene.buildFlags);
     md << "`" << options.command << "`: a child `farfield build" << buildFlags
@@ -160,11 +157,9 @@ Status runReplay(const ReplayParams& p, const Scenario& scenario, const BenchOpt
        << buildTable.markdown() << "\n**Replay** (per frame: `" << name << ".csv`; summary: `"
        << name << "-summary.json`)\n\n"
        << replayTable.markdown() << "\n![replay timeline](" << name << ".png)\n";
-    if (!md)
-        return Status(
-                ErrorCode::IoError, "cannot write " + (options.outDir / (name + ".md")).string());
     std::filesystem::remove(report);
     std::filesystem::remove(path);
+    FF_RETURN_IF_ERROR(mdFile.close());
     removeWorkFolder(options);
     return Status::ok();
 }

@@ -169,6 +169,22 @@ Status plotCharts(const std::string& kind, const std::filesystem::path& csv, con
     return Status::ok();
 }
 
+ReportFile::ReportFile(const std::filesystem::path& outDir, const std::string& name, const std::string& title,
+                       const std::string& description)
+    : mPath(outDir / (name + ".md"))
+    , mOut(mPath) {
+    mOut << "# " << title << "\n\n";
+    if (!description.empty())
+        mOut << description << "\n\n";
+}
+
+Status ReportFile::close() {
+    mOut.close();
+    if (!mOut)
+        return Status(ErrorCode::IoError, "cannot write " + mPath.string());
+    return Status::ok();
+}
+
 Result<nlohmann::json> readJsonObject(const std::filesystem::path& path, const char* what) {
     std::ifstream in(path);
     nlohmann::json json = nlohmann::json::parse(in, nullptr, false);

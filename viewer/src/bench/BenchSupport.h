@@ -8,6 +8,7 @@
 
 #include <cstdint>
 #include <filesystem>
+#include <fstream>
 #include <string>
 #include <vector>
 
@@ -28,6 +29,21 @@ private:
 };
 
 std::string formatNumber(double value, int decimals = 2);
+
+/** A scenario's Markdown report, OUTDIR/NAME.md: opened with its title (and description, if
+ *  any) as the heading; close() says whether everything reached the disk. */
+class ReportFile {
+public:
+    ReportFile(const std::filesystem::path& outDir, const std::string& name, const std::string& title,
+               const std::string& description);
+    std::ostream& stream() noexcept { return mOut; }
+    /** IoError naming the file if any write failed. */
+    [[nodiscard]] Status close();
+
+private:
+    std::filesystem::path mPath;
+    std::ofstream mOut;
+};
 
 /** Renders the view `warmup` times untimed, then `timed` times; returns the last frame with
  *  the median total/select/draw milliseconds in its stats. */

@@ -11,7 +11,6 @@
 
 #include <array>
 #include <cstdio>
-#include <fstream>
 #include <string>
 #include <vector>
 
@@ -90,10 +89,8 @@ Status runTable2(const Table2Params& p, const Scenario& scenario, const BenchOpt
     const std::filesystem::path csv = options.outDir / (scenario.name + ".csv");
     FF_RETURN_IF_ERROR(table.write(csv));
     FF_RETURN_IF_ERROR(plotCharts("table2", csv, options.outDir));
-    std::ofstream md(options.outDir / (scenario.name + ".md"));
-    md << "# " << scenario.title << "\n\n";
-    if (!scenario.description.empty())
-        md << scenario.description << "\n\n";
+    ReportFile mdFile(options.outDir, scenario.name, scenario.title, scenario.description);
+    std::ostream& md = mdFile.stream();
     md << "`" << options.command << "` on " << file->header().storedTriangles << " triangles (the paper's tree: 52,470), "
        << "viewed " << p.azimuth << " degrees about the vertical axis from a sampled direction, at d scene radii, "
        << "epsilon = " << p.eps << " pixel. "
@@ -101,6 +98,7 @@ Status runTable2(const Table2Params& p, const Scenario& scenario, const BenchOpt
        << "llvmpipe; PSNR/SSIM against the same view with all geometry, " << p.supersample << "x" << p.supersample
        << " supersampled.\n\n"
        << table.markdown() << "\n![speed against accuracy](" << scenario.name << ".png)\n";
+    FF_RETURN_IF_ERROR(mdFile.close());
     removeWorkFolder(options);
     return Status::ok();
 }

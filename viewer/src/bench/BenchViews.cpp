@@ -16,7 +16,6 @@
 #include <cctype>
 #include <cmath>
 #include <cstdio>
-#include <fstream>
 #include <limits>
 #include <optional>
 #include <set>
@@ -347,10 +346,8 @@ Status runViews(const ViewsParams& p, const Scenario& scenario, const BenchOptio
     const std::filesystem::path csv = options.outDir / (scenario.name + ".csv");
     FF_RETURN_IF_ERROR(table.write(csv));
     FF_RETURN_IF_ERROR(plotCharts("views", csv, options.outDir));
-    std::ofstream md(options.outDir / (scenario.name + ".md"));
-    md << "# " << scenario.title << "\n\n";
-    if (!scenario.description.empty())
-        md << scenario.description << "\n\n";
+    ReportFile mdFile(options.outDir, scenario.name, scenario.title, scenario.description);
+    std::ostream& md = mdFile.stream();
     md << "Command: `" << options.command << "`\n\n"
        << "Scene: " << describeScene(p.scene) << " (" << sceneSummary << "). Image " << width << "x"
        << height << "; reference: method full, " << p.supersample << "x" << p.supersample
@@ -362,10 +359,7 @@ Status runViews(const ViewsParams& p, const Scenario& scenario, const BenchOptio
        << table.markdown() << "\n![error against frame time](" << scenario.name << ".png)\n";
     if (p.sweep.active())
         md << "\n![error against " << p.sweep.parameter << "](" << scenario.name << "-sweep.png)\n";
-    if (!md)
-        return Status(
-                ErrorCode::IoError,
-                "cannot write " + (options.outDir / (scenario.name + ".md")).string());
+    FF_RETURN_IF_ERROR(mdFile.close());
     removeWorkFolder(options);
     return Status::ok();
 }
