@@ -53,6 +53,9 @@ bool refusedAsAnisotropic(const storage::NodeRecord& node, float limit) {
 
 // Priorities for pages nobody can see the size of yet (the root, a full draw).
 constexpr float kTopPriority = 1e30f;
+/** `--cube-draw auto` draws points up to this ε: every drawn cube then covers at most 4 pixels,
+ *  a point at most 2 pixels wide. */
+constexpr float kAutoPointsMaxEpsilon = 2.0f;
 
 // Deeper than any builder writes (octree levels <= 20 per prototype, instance level <= 24 plus
 // groups): a file nesting further has a reference cycle, which must not overflow the stack.
@@ -150,7 +153,7 @@ Status Selection::select(const Camera& camera, const SelectionOptions& options, 
     }
     mergeGeometryDraws();
     out.cubesAsPoints = options.cubeStyle == CubeStyle::Points ||
-                        (options.cubeStyle == CubeStyle::Auto && options.epsilonPixels <= 2.0f);
+                        (options.cubeStyle == CubeStyle::Auto && options.epsilonPixels <= kAutoPointsMaxEpsilon);
     return Status::ok();
 }
 
@@ -172,18 +175,26 @@ void Selection::visit(const storage::NodeRecord& node, storage::NodeRef ref, std
         return;
     }
 
-    // ε rule on the cell's bounding sphere, measured at its nearest point to the eye.
+    // ε rule (Chamberlain et al. '96, §3: a cube is drawn where its "projected screen image is no
+    // larger than a pixel"): the area the cell's box covers on screen, seen from the eye's
+    // direction at the cell's nearest point, below ε² pixels. The area is a box's silhouette
+    // (each face's area times |cos| to the eye), the same measure the point shader draws with.
     const glm::vec3 cellMin = toVec3(node.cellMin);
     const glm::vec3 cellMax = toVec3(node.cellMax);
     const glm::vec3& localEye = mOut->localEyes[transform];
     const float scale = mTransformScale[transform];
-    const float radius = 0.5f * glm::length(cellMax - cellMin) * scale;
-    const float distance = glm::length(0.5f * (cellMin + cellMax) - localEye) * scale;
+    const glm::vec3 extent = cellMax - cellMin;
+    const glm::vec3 toEye = localEye - 0.5f * (cellMin + cellMax);
+    const float eyeDistance = glm::length(toEye);
+    const glm::vec3 direction = eyeDistance > 0.0f ? glm::abs(toEye) / eyeDistance : glm::vec3(0.0f);
+    const float area = glm::dot(glm::vec3(extent.y * extent.z, extent.z * extent.x, extent.x * extent.y), direction);
+    const float size = std::sqrt(area) * scale; // the side of a square of that area
+    const float nearest = glm::length(glm::max(glm::max(cellMin - localEye, localEye - cellMax), 0.0f)) * scale;
     float projected = INFINITY;
     if (mCamera->orthographic)
-        projected = 2.0f * radius * mPixelScale;
-    else if (distance > radius)
-        projected = 2.0f * radius * mPixelScale / (distance - radius);
+        projected = size * mPixelScale;
+    else if (nearest > 0.0f)
+        projected = size * mPixelScale / nearest;
     if (projected < mOptions.epsilonPixels && (node.flags & storage::kNodeHasCube) &&
         !refusedAsAnisotropic(node, mOptions.maxCubeAnisotropy)) {
         emitCube(node, ref, transform);

@@ -91,7 +91,7 @@ TEST(BuildCommandTest, ForestOf16384TreesIsOneTreePlusInstances) {
              "--size",
              "160x120",
              "--distance",
-             "3",
+             "2", // near enough that the trees in front are entered (3,607 at ε = 1)
              "--coverage-alpha"},
             dir);
     ASSERT_TRUE(exitedWith(rendered, 0)) << rendered.describe();

@@ -92,11 +92,11 @@ TEST(ReplayCommandTest, SyncModeIsDeterministicAndCompletesEveryFrame) {
 }
 
 // The working set of one complete frame (docs/results/paging.md) against scene size, at a scale
-// a test can afford: at 80x60 the orbit view's cut already stops above the leaves of a
-// 250 k-triangle terrain, so a 4x larger terrain needs only a few more node records. Measured
-// with 16 KiB pages: 1.31 -> 1.88 MiB (x1.43), 94-95% of the loaded node slots and 61-68% of
-// the loaded triangle slots used; the former treelet layout: 3.42 -> 6.59 MiB (x1.93), 33-56%
-// and 1.5-3%.
+// a test can afford: at 120x90 the orbit view's cut already stops above the leaves of a
+// 1 M-triangle terrain, so 4x the triangles need only a few more node records. Measured with
+// 16 KiB pages: 1.81 -> 2.11 MiB (x1.16), 93-95% of the loaded node slots and 41-80% of the
+// loaded triangle slots used. (At 80x60 the larger terrain draws 144 triangles, too few for
+// the triangle slots to say anything about the layout.)
 TEST(ReplayCommandTest, TerrainWorkingSetGrowsFarSlowerThanTheScene) {
     const fs::path dir = freshTestDir();
     std::vector<json> summaries;
@@ -110,7 +110,7 @@ TEST(ReplayCommandTest, TerrainWorkingSetGrowsFarSlowerThanTheScene) {
         const fs::path path = makePath(dir, scene, "orbit", 1);
         const fs::path summary = dir / (std::string("summary-") + triangles + ".json");
         const ProcessResult run = runFarfield(
-                {"replay", scene.string(), path.string(), "--sync", "--cache-mb", "256", "--size", "80x60",
+                {"replay", scene.string(), path.string(), "--sync", "--cache-mb", "256", "--size", "120x90",
                  "--summary", summary.string()},
                 dir);
         ASSERT_EQ(run.exitCode, 0) << run.describe();

@@ -124,7 +124,7 @@ CommandRunner addRenderCommand(CLI::App& app) {
     cmd->add_option("--size", args->size, "Image size WIDTHxHEIGHT")->capture_default_str();
     cmd->add_option("--epsilon", args->epsilon, "Cells smaller than this many pixels are drawn as color cubes (0: all geometry)")->capture_default_str();
     cmd->add_option("--method", args->method, "hierarchical or full (every triangle, no hierarchy)")->capture_default_str();
-    cmd->add_option("--cube-draw", args->cubeDraw, "Color cubes as faces, points (sub-pixel splats) or auto (points when epsilon <= 2)")
+    cmd->add_option("--cube-draw", args->cubeDraw, "Color cubes as faces, points (one splat per cube) or auto (points when epsilon <= 2)")
             ->capture_default_str()
             ->check(CLI::IsMember({"auto", "faces", "points"}));
     cmd->add_option("--cube-anisotropy", args->cubeAnisotropy,

@@ -11,7 +11,7 @@ extern const char* const kCubeShaderInputs;
 /** Color cubes: one instance per cube, 18 vertices (a face per axis), hidden faces collapsed. */
 extern const char* const kCubeVertexShader;
 extern const char* const kCubeFragmentShader;
-/** Sub-pixel color cubes: one point per cube, faces blended by projected area. */
+/** Small color cubes: one point per cube, faces blended by projected area. */
 extern const char* const kCubePointVertexShader;
 
 } // namespace ff::runtime::gl

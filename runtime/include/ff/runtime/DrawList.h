@@ -34,7 +34,7 @@ struct DrawList {
     std::vector<glm::vec3> localEyes;
     std::vector<GeometryDraw> geometry;
     std::vector<CubeDraw> cubes;
-    /** Draw the cubes as area-weighted points (all sub-pixel) rather than as faces. */
+    /** Draw the cubes as area-weighted points (each covers at most a few pixels) rather than as faces. */
     bool cubesAsPoints = false;
 
     void clear() {

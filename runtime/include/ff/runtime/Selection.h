@@ -24,7 +24,7 @@ enum class Method {
 enum class CubeStyle {
     Faces,  ///< the visible faces as quads (Chamberlain et al.)
     Points, ///< one point per cube: visible faces blended by projected area, alpha by coverage
-    Auto,   ///< points when ε <= 2 pixels (every drawn cube is then sub-pixel), else faces
+    Auto,   ///< points when ε <= 2 pixels (every drawn cube then covers at most 4 pixels), else faces
 };
 
 /**
@@ -42,8 +42,9 @@ public:
 
 struct SelectionOptions {
     Method method = Method::Hierarchical;
-    /** A cell whose projected size is below this many pixels is drawn as its color cube;
-     *  0 draws geometry everywhere. */
+    /** A cell whose box covers less than this squared in pixels on screen (its silhouette,
+     *  measured at the cell's nearest point) is drawn as its color cube; 0 draws geometry
+     *  everywhere. */
     float epsilonPixels = 1.0f;
     CubeStyle cubeStyle = CubeStyle::Auto;
     /** A cube whose coverage (alpha) along the three axes differs by more than this is refused
@@ -62,8 +63,8 @@ struct SelectionOptions {
 
 /**
  * Per-frame selection (Chamberlain et al. '96, §3): walks the scene from the instance-level
- * root, skipping cells outside the frustum, drawing a cell as its color cube when it projects
- * smaller than ε pixels, a cell's own triangles when it is refined (each triangle once), and
+ * root, skipping cells outside the frustum, drawing a cell as its color cube when its box
+ * covers less than ε² pixels, a cell's own triangles when it is refined (each triangle once), and
  * children in back-to-front order. Instances enter their prototype's hierarchy with the
  * instance transform. CPU only: no GL here.
  *
