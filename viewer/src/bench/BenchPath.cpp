@@ -36,11 +36,8 @@ struct PathParams {
     PathSpec path;
     int supersample = 1;
     std::vector<MethodSpec> methods;
-    /** 0: every page resident (memory map); else a cold streaming cache of this many MiB. */
-    std::int64_t cacheMb = 0;
-    std::int64_t ioThreads = 2;        ///< as `farfield replay`
-    std::int64_t uploadsPerFrame = 64; ///< as `farfield replay`
-    std::int64_t prefetchFrames = 4;   ///< as `farfield replay`
+    /** cacheMb 0: every page resident (memory map); else a cold streaming cache per method. */
+    CacheSpec cache = {.cacheMb = 0};
 };
 
 double percentile(std::vector<double> values, double p) {
@@ -70,7 +67,7 @@ Result<MethodPages> openPages(
         const storage::SceneFile& file,
         const std::filesystem::path& scenePath) {
     MethodPages pages;
-    if (p.cacheMb == 0) {
+    if (p.cache.cacheMb == 0) {
         FF_ASSIGN_OR_RETURN(pages.renderer, runtime::FrameRenderer::create(file));
         return pages;
     }
@@ -82,8 +79,8 @@ Result<MethodPages> openPages(
             openStreaming(
                     file,
                     std::shared_ptr<cache::IPageSource>(std::move(source)),
-                    static_cast<std::uint64_t>(p.cacheMb) << 20,
-                    static_cast<unsigned>(p.ioThreads)));
+                    static_cast<std::uint64_t>(p.cache.cacheMb) << 20,
+                    static_cast<unsigned>(p.cache.ioThreads)));
     pages.streaming = std::move(streaming);
     FF_ASSIGN_OR_RETURN(
             pages.renderer, runtime::FrameRenderer::create(file, *pages.streaming->access));
@@ -173,10 +170,10 @@ Status runPath(const PathParams& p, const Scenario& scenario, const BenchOptions
         for (std::int64_t f = 0; f < frames; ++f) {
             double pumpMs = 0.0;
             if (pageCache) {
-                if (p.prefetchFrames > 0)
-                    pages.renderer->setPrefetchCamera(cameraAt(f + p.prefetchFrames));
+                if (p.cache.prefetchFrames > 0)
+                    pages.renderer->setPrefetchCamera(cameraAt(f + p.cache.prefetchFrames));
                 const auto start = std::chrono::steady_clock::now();
-                pageCache->pump(static_cast<std::size_t>(p.uploadsPerFrame));
+                pageCache->pump(static_cast<std::size_t>(p.cache.uploadsPerFrame));
                 pumpMs = std::chrono::duration<double, std::milli>(
                                  std::chrono::steady_clock::now() - start)
                                  .count();
@@ -252,9 +249,9 @@ Status runPath(const PathParams& p, const Scenario& scenario, const BenchOptions
                                 : "`" + p.scene.gltf + "`")
        << ". Path: `farfield path " << p.path.generator << "`, " << frames << " frames at " << width
        << "x" << height << ". Pages: "
-       << (p.cacheMb == 0
+       << (p.cache.cacheMb == 0
                    ? std::string("all resident")
-                   : "a cold " + std::to_string(p.cacheMb) + " MiB streaming cache per method")
+                   : "a cold " + std::to_string(p.cache.cacheMb) + " MiB streaming cache per method")
        << ". Reference: method full, " << p.supersample << "x" << p.supersample
        << " supersampled, every frame. "
        << "Instability: the mean over pixels of the approximation's frame-to-frame change in "
@@ -263,7 +260,7 @@ Status runPath(const PathParams& p, const Scenario& scenario, const BenchOptions
        << ".csv`.\n\n"
        << summary.markdown() << "\n![instability and PSNR per frame](" << scenario.name
        << ".png)\n";
-    if (p.cacheMb > 0)
+    if (p.cache.cacheMb > 0)
         md << "\n![PSNR against bytes read](" << scenario.name << "-bytes.png)\n";
     FF_RETURN_IF_ERROR(mdFile.close());
     removeWorkFolder(options);
@@ -283,14 +280,7 @@ Result<BenchRun> preparePath(const Scenario& scenario) {
     p.path = readPathSpec(reader, p.path, 2);
     p.supersample = readReferenceSupersample(reader, p.supersample);
     p.methods = readMethods(reader);
-    p.cacheMb = reader.integer("cache_mb", p.cacheMb);
-    p.ioThreads = reader.integer("io_threads", p.ioThreads);
-    p.uploadsPerFrame = reader.integer("uploads_per_frame", p.uploadsPerFrame);
-    p.prefetchFrames = reader.integer("prefetch_frames", p.prefetchFrames);
-    if (p.cacheMb < 0 || p.ioThreads < 1 || p.uploadsPerFrame < 1 || p.prefetchFrames < 0)
-        reader.fail(
-                "",
-                "cache_mb and prefetch_frames must be >= 0, io_threads and uploads_per_frame >= 1");
+    p.cache = readCacheSpec(reader, p.cache, 0);
     FF_RETURN_IF_ERROR(reader.finish());
     return BenchRun(
             [p, scenario](const BenchOptions& options) { return runPath(p, scenario, options); });

@@ -22,10 +22,7 @@ struct ReplayParams {
     SceneSpec scene;
     PathSpec path = {.generator = "flythrough", .options = {}};
     std::array<int, 2> size = {640, 480};
-    std::int64_t cacheMb = 512;
-    std::int64_t ioThreads = 2;
-    std::int64_t uploadsPerFrame = 64;
-    std::int64_t prefetchFrames = 4;
+    CacheSpec cache;
 };
 
 std::string joined(const std::vector<std::string>& words) {
@@ -76,7 +73,7 @@ Status runReplay(const ReplayParams& p, const Scenario& scenario, const BenchOpt
             "%s: replaying %lld frames through a %lld MiB cache\n",
             name.c_str(),
             static_cast<long long>(p.path.options.frames),
-            static_cast<long long>(p.cacheMb));
+            static_cast<long long>(p.cache.cacheMb));
     FF_ASSIGN_OR_RETURN(
             const ChildRun replay,
             runChild(
@@ -85,15 +82,15 @@ Status runReplay(const ReplayParams& p, const Scenario& scenario, const BenchOpt
                      scene.string(),
                      path.string(),
                      "--cache-mb",
-                     std::to_string(p.cacheMb),
+                     std::to_string(p.cache.cacheMb),
                      "--size",
                      std::to_string(p.size[0]) + "x" + std::to_string(p.size[1]),
                      "--io-threads",
-                     std::to_string(p.ioThreads),
+                     std::to_string(p.cache.ioThreads),
                      "--uploads-per-frame",
-                     std::to_string(p.uploadsPerFrame),
+                     std::to_string(p.cache.uploadsPerFrame),
                      "--prefetch-frames",
-                     std::to_string(p.prefetchFrames),
+                     std::to_string(p.cache.prefetchFrames),
                      "--csv",
                      frames.string(),
                      "--summary",
@@ -149,8 +146,8 @@ Status runReplay(const ReplayParams& p, const Scenario& scenario, const BenchOpt
             p.scene.buildFlags.empty() ? "" : " " + joined(p.scene.buildFlags);
     md << "`" << options.command << "`: a child `farfield build" << buildFlags
        << "`, then `farfield " << joined(p.path.commandArgs("SCENE", "PATH.json"))
-       << "` and a child `farfield replay --cache-mb " << p.cacheMb
-       << " --uploads-per-frame " << p.uploadsPerFrame << "` at " << p.size[0] << "x" << p.size[1]
+       << "` and a child `farfield replay --cache-mb " << p.cache.cacheMb
+       << " --uploads-per-frame " << p.cache.uploadsPerFrame << "` at " << p.size[0] << "x" << p.size[1]
        << ", asynchronous. Peak RSS is each child's ru_maxrss; the replay also reports its own "
           "peak split into "
        << "anonymous and file-backed pages.\n\n**Build**\n\n"
@@ -172,14 +169,7 @@ Result<BenchRun> prepareReplay(const Scenario& scenario) {
     p.scene = readSceneSpec(reader);
     p.size = reader.size("size", p.size);
     p.path = readPathSpec(reader, p.path, 1);
-    p.cacheMb = reader.integer("cache_mb", p.cacheMb);
-    p.ioThreads = reader.integer("io_threads", p.ioThreads);
-    p.uploadsPerFrame = reader.integer("uploads_per_frame", p.uploadsPerFrame);
-    p.prefetchFrames = reader.integer("prefetch_frames", p.prefetchFrames);
-    if (p.cacheMb < 1 || p.ioThreads < 1 || p.uploadsPerFrame < 1 || p.prefetchFrames < 0)
-        reader.fail(
-                "",
-                "cache_mb, io_threads and uploads_per_frame must be >= 1, prefetch_frames >= 0");
+    p.cache = readCacheSpec(reader, p.cache, 1);
     FF_RETURN_IF_ERROR(reader.finish());
     return BenchRun(
             [p, scenario](const BenchOptions& options) { return runReplay(p, scenario, options); });

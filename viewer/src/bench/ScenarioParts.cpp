@@ -57,6 +57,18 @@ std::vector<std::string> PathSpec::commandArgs(
     return args;
 }
 
+CacheSpec readCacheSpec(ScenarioReader& reader, CacheSpec fallback, std::int64_t minCacheMb) {
+    CacheSpec c = fallback;
+    c.cacheMb = reader.integer("cache_mb", c.cacheMb);
+    c.ioThreads = reader.integer("io_threads", c.ioThreads);
+    c.uploadsPerFrame = reader.integer("uploads_per_frame", c.uploadsPerFrame);
+    c.prefetchFrames = reader.integer("prefetch_frames", c.prefetchFrames);
+    if (c.cacheMb < minCacheMb || c.ioThreads < 1 || c.uploadsPerFrame < 1 || c.prefetchFrames < 0)
+        reader.fail("", "cache_mb must be >= " + std::to_string(minCacheMb) +
+                                ", io_threads and uploads_per_frame >= 1, prefetch_frames >= 0");
+    return c;
+}
+
 PathSpec readPathSpec(ScenarioReader& reader, PathSpec fallback, std::int64_t minFrames) {
     PathSpec p = std::move(fallback);
     ScenarioReader path = reader.object("path");

@@ -51,6 +51,18 @@ struct PathSpec {
  *  at least `minFrames`. Errors go to the reader. */
 PathSpec readPathSpec(ScenarioReader& reader, PathSpec fallback, std::int64_t minFrames);
 
+/** The streaming cache's settings, as `farfield replay` takes them. */
+struct CacheSpec {
+    std::int64_t cacheMb = 512;
+    std::int64_t ioThreads = 2;
+    std::int64_t uploadsPerFrame = 64;
+    std::int64_t prefetchFrames = 4;
+};
+
+/** Reads cache_mb (at least `minCacheMb`), io_threads, uploads_per_frame and prefetch_frames
+ *  over `fallback`. Errors go to the reader. */
+CacheSpec readCacheSpec(ScenarioReader& reader, CacheSpec fallback, std::int64_t minCacheMb);
+
 /** One method compared: a label and the selection options its keys set. */
 struct MethodSpec {
     std::string label;
