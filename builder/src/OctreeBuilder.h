@@ -28,8 +28,9 @@ struct BuildNode {
     std::uint64_t firstTriangle = 0; ///< own triangles: [firstTriangle, +triangleCount)
     std::uint64_t triangleCount = 0;
     std::uint32_t instanceIndex = 0; ///< kind == Instance
-    /** Set for a node built elsewhere (a chunk root): emitted as is, refs already final. */
-    std::optional<storage::NodeRecord> external;
+    /** Set when the node's children are already written (a chunk crown's lowest level): the
+     *  ref of the first child, final once the chunk is committed; `firstChild` is unused. */
+    std::optional<storage::NodeRef> placedChildren;
 };
 
 /** An octree cell: a cube. */

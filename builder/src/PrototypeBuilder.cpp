@@ -60,15 +60,13 @@ std::uint64_t cellKey(const Cell& root, const glm::vec3& p, int level) {
     return spreadBits(index[0]) | (spreadBits(index[1]) << 1) | (spreadBits(index[2]) << 2);
 }
 
-void addToSummary(const std::vector<BuildNode>& nodes, PrototypeSummary& summary) {
-    for (const BuildNode& node : nodes) {
-        if (node.external || node.level > PrototypeSummary::kDepth)
-            continue;
-        const bool leaf = node.childCount == 0;
-        const int last = leaf ? PrototypeSummary::kDepth : node.level;
-        for (int l = node.level; l <= last; ++l)
-            summary.cuts[static_cast<std::size_t>(l)].push_back({node.cellMin, node.cellMax, node.cube});
-    }
+void addToSummary(const BuildNode& node, PrototypeSummary& summary) {
+    if (node.level > PrototypeSummary::kDepth)
+        return;
+    const bool leaf = node.childCount == 0;
+    const int last = leaf ? PrototypeSummary::kDepth : node.level;
+    for (int l = node.level; l <= last; ++l)
+        summary.cuts[static_cast<std::size_t>(l)].push_back({node.cellMin, node.cellMax, node.cube});
 }
 
 // Builds one chunk completely in memory. Runs on worker threads: touches only its arguments.
@@ -77,7 +75,7 @@ ChunkOutput buildChunk(
         const Cell& cell,
         int level,
         int octant,
-        bool placeRoot,
+        std::uint64_t crownBudget,
         const HierarchyParams& params,
         std::uint32_t pageSize) {
     CubeBaker baker(params.bakeResolution);
@@ -87,8 +85,9 @@ ChunkOutput buildChunk(
     out.boundsMin = nodes[0].boundsMin;
     out.boundsMax = nodes[0].boundsMax;
     out.nodes = nodes.size();
-    addToSummary(nodes, out.summary);
-    out.encoded = encodeSubtree(std::move(nodes), std::move(triangles), pageSize, placeRoot);
+    for (const BuildNode& node : nodes)
+        addToSummary(node, out.summary);
+    out.encoded = encodeSubtree(std::move(nodes), std::move(triangles), pageSize, crownBudget);
     out.maxDepth = out.encoded.maxLevel;
     return out;
 }
@@ -105,11 +104,13 @@ PrototypeBuilder::PrototypeBuilder(
         storage::SceneWriter& writer,
         const HierarchyParams& params,
         std::uint64_t chunkTriangles,
+        std::uint64_t crownBytes,
         unsigned threads,
         std::filesystem::path tempDirectory)
     : mWriter(writer)
     , mParams(params)
     , mChunkTriangles(std::max<std::uint64_t>(chunkTriangles, 1024))
+    , mCrownBytes(crownBytes)
     , mThreads(std::max(threads, 1u))
     , mTempDirectory(std::move(tempDirectory)) {}
 
@@ -139,11 +140,11 @@ Result<PrototypeBuildResult> PrototypeBuilder::build(
 Result<PrototypeBuildResult> PrototypeBuilder::buildInMemory(RunFile& triangles, const Cell& root) {
     FF_ASSIGN_OR_RETURN(std::vector<storage::PackedTriangle> all, triangles.readAll());
     triangles.remove();
-    ChunkOutput chunk = buildChunk(std::move(all), root, 0, 0, true, mParams, mWriter.pageSize());
+    ChunkOutput chunk = buildChunk(std::move(all), root, 0, 0, 0, mParams, mWriter.pageSize());
     PrototypeBuildResult result;
     result.geometryPages = chunk.encoded.geometryPageCount(mWriter.pageSize());
     result.nodePages = chunk.encoded.nodePages.size();
-    FF_RETURN_IF_ERROR(commitSubtree(mWriter, chunk.encoded).status());
+    FF_RETURN_IF_ERROR(commitSubtree(mWriter, chunk.encoded));
     result.record.root = *chunk.encoded.rootRef;
     result.record.boundsMin = {chunk.boundsMin.x, chunk.boundsMin.y, chunk.boundsMin.z};
     result.record.boundsMax = {chunk.boundsMax.x, chunk.boundsMax.y, chunk.boundsMax.z};
@@ -284,6 +285,18 @@ Result<PrototypeBuildResult> PrototypeBuilder::buildChunked(
     }
 
     // ---- build chunks on worker threads, commit in chunk order (deterministic output) -------
+    // A chunk written on its own starts new pages: each chunk a frame enters would cost at
+    // least a node page and a geometry page however little of it the frame needs, a cost that
+    // grows with the number of chunks, that is with the scene (docs/results/paging.md). So
+    // each chunk's top levels, its crown, wait in memory and are laid out with the cells above
+    // the chunks: the coarse levels of the whole prototype then share pages in one
+    // breadth-first order, as if it had been built in one piece. A crown holds at most a page
+    // of records (a chunk's own pages then start at a level that fills pages) and at least
+    // the chunk's root.
+    const std::uint64_t crownBudget = std::clamp<std::uint64_t>(
+            mCrownBytes / std::max<std::size_t>(chunkNodes.size(), 1) / sizeof(BuildNode),
+            1,
+            storage::nodesPerPage(mWriter.pageSize()));
     PrototypeBuildResult result;
     result.chunks = chunkNodes.size();
     std::vector<ChunkOutput> finished(chunkNodes.size());
@@ -298,10 +311,10 @@ Result<PrototypeBuildResult> PrototypeBuilder::buildChunked(
             const int octant = node.octant;
             const HierarchyParams params = mParams;
             const std::uint32_t pageSize = mWriter.pageSize();
-            running.push_back(std::async(std::launch::async, [file, cell, level, octant, params, pageSize]() -> Result<ChunkOutput> {
+            running.push_back(std::async(std::launch::async, [file, cell, level, octant, crownBudget, params, pageSize]() -> Result<ChunkOutput> {
                 FF_ASSIGN_OR_RETURN(std::vector<storage::PackedTriangle> chunkTriangles, file->readAll());
                 file->remove();
-                return buildChunk(std::move(chunkTriangles), cell, level, octant, false, params, pageSize);
+                return buildChunk(std::move(chunkTriangles), cell, level, octant, crownBudget, params, pageSize);
             }));
         }
         for (std::size_t c = begin; c < end; ++c) {
@@ -310,8 +323,7 @@ Result<PrototypeBuildResult> PrototypeBuilder::buildChunked(
                 return chunk.status();
             result.geometryPages += chunk->encoded.geometryPageCount(mWriter.pageSize());
             result.nodePages += chunk->encoded.nodePages.size();
-            FF_ASSIGN_OR_RETURN(storage::NodeRecord rootRecord, commitSubtree(mWriter, chunk->encoded));
-            chunk->encoded.root = rootRecord;
+            FF_RETURN_IF_ERROR(commitSubtree(mWriter, chunk->encoded));
             result.nodes += chunk->nodes;
             result.maxDepth = std::max(result.maxDepth, chunk->maxDepth);
             for (std::size_t l = 0; l < chunk->summary.cuts.size(); ++l) {
@@ -341,9 +353,8 @@ Result<PrototypeBuildResult> PrototypeBuilder::buildChunked(
         n.triangleCount = t.own.size();
         ownTriangles.insert(ownTriangles.end(), t.own.begin(), t.own.end());
         t.own = {};
-        if (t.chunk >= 0) {
+        if (t.chunk >= 0) { // stands for the chunk's crown until it is spliced in below
             const ChunkOutput& chunk = finished[static_cast<std::size_t>(t.chunk)];
-            n.external = chunk.encoded.root;
             n.cube = chunk.rootCube;
             n.boundsMin = chunk.boundsMin;
             n.boundsMax = chunk.boundsMax;
@@ -353,7 +364,7 @@ Result<PrototypeBuildResult> PrototypeBuilder::buildChunked(
     CubeBaker baker(mParams.bakeResolution);
     for (std::size_t r = top.size(); r-- > 0;) {
         BuildNode& n = nodes[r];
-        if (n.external)
+        if (top[r].chunk >= 0)
             continue;
         n.boundsMin = glm::vec3(std::numeric_limits<float>::infinity());
         n.boundsMax = glm::vec3(-std::numeric_limits<float>::infinity());
@@ -372,14 +383,40 @@ Result<PrototypeBuildResult> PrototypeBuilder::buildChunked(
         const QuadrantColors underlay = compositeOctantQuadrants(children);
         n.cube = baker.finish(&underlay);
     }
-    addToSummary(nodes, result.summary);
+    for (std::size_t i = 0; i < top.size(); ++i)
+        if (top[i].chunk < 0) // a chunk summarised its own nodes
+            addToSummary(nodes[i], result.summary);
     const glm::vec3 boundsMin = nodes[0].boundsMin;
     const glm::vec3 boundsMax = nodes[0].boundsMax;
-    EncodedSubtree encoded = encodeSubtree(std::move(nodes), std::move(ownTriangles), mWriter.pageSize(), true);
+
+    // Splice each chunk's crown in: its root replaces the chunk's cell, the rest goes after.
+    std::uint64_t crownNodes = 0;
+    for (std::size_t i = 0; i < top.size(); ++i) {
+        if (top[i].chunk < 0)
+            continue;
+        EncodedSubtree& chunk = finished[static_cast<std::size_t>(top[i].chunk)].encoded;
+        const std::size_t base = nodes.size() - 1; // crown position k > 0 lands at base + k
+        const std::uint64_t triangleBase = ownTriangles.size();
+        for (std::size_t k = 0; k < chunk.crown.size(); ++k) {
+            BuildNode node = std::move(chunk.crown[k]);
+            if (node.childCount > 0 && !node.placedChildren)
+                node.firstChild = static_cast<std::uint32_t>(base + node.firstChild);
+            node.firstTriangle += triangleBase;
+            if (k == 0)
+                nodes[i] = std::move(node);
+            else
+                nodes.push_back(std::move(node));
+        }
+        ownTriangles.insert(ownTriangles.end(), chunk.crownTriangles.begin(), chunk.crownTriangles.end());
+        crownNodes += chunk.crown.size();
+        chunk.crown = std::vector<BuildNode>();
+        chunk.crownTriangles = std::vector<storage::PackedTriangle>();
+    }
+    EncodedSubtree encoded = encodeSubtree(std::move(nodes), std::move(ownTriangles), mWriter.pageSize(), 0);
     result.geometryPages += encoded.geometryPageCount(mWriter.pageSize());
     result.nodePages += encoded.nodePages.size();
-    result.nodes += encoded.nodeCount - result.chunks; // chunk roots were counted with their chunks
-    FF_RETURN_IF_ERROR(commitSubtree(mWriter, encoded).status());
+    result.nodes += encoded.nodeCount - crownNodes; // crowns were counted with their chunks
+    FF_RETURN_IF_ERROR(commitSubtree(mWriter, encoded));
     result.record.root = *encoded.rootRef;
     result.record.boundsMin = {boundsMin.x, boundsMin.y, boundsMin.z};
     result.record.boundsMax = {boundsMax.x, boundsMax.y, boundsMax.z};

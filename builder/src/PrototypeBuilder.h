@@ -47,7 +47,9 @@ inline constexpr std::uint64_t kChunkBytesPerTriangle = 160;
 
 /**
  * Builds one prototype's octree from its run file and appends its pages to `writer`. A
- * prototype larger than one chunk (chunkTriangles) is partitioned out of core first.
+ * prototype larger than one chunk (chunkTriangles) is partitioned out of core first. Each
+ * chunk's top levels (its crown, at most a page of records and crownBytes across all chunks)
+ * are held back and written with the cells above the chunks, in one breadth-first order.
  */
 class PrototypeBuilder {
 public:
@@ -55,6 +57,7 @@ public:
             storage::SceneWriter& writer,
             const HierarchyParams& params,
             std::uint64_t chunkTriangles,
+            std::uint64_t crownBytes,
             unsigned threads,
             std::filesystem::path tempDirectory);
 
@@ -76,6 +79,7 @@ private:
     storage::SceneWriter& mWriter;
     const HierarchyParams& mParams;
     std::uint64_t mChunkTriangles;
+    std::uint64_t mCrownBytes; ///< memory for the chunks' crowns, all chunks together
     unsigned mThreads;
     std::filesystem::path mTempDirectory;
 };

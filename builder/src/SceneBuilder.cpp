@@ -241,9 +241,11 @@ Result<BuildReport> SceneBuilder::finish() {
 
     // ---- partition + buildHierarchy, one prototype at a time ---------------------------------
     const std::uint64_t fixedReserve = std::min<std::uint64_t>(s.options.memoryBudgetBytes / 4, 64ull << 20);
-    const std::uint64_t chunkBudget = (s.options.memoryBudgetBytes - fixedReserve) / s.options.threads;
+    const std::uint64_t crownReserve = s.options.memoryBudgetBytes / 16; // chunks' crowns, PrototypeBuilder.h
+    const std::uint64_t chunkBudget = (s.options.memoryBudgetBytes - fixedReserve - crownReserve) / s.options.threads;
     const std::uint64_t chunkTriangles = chunkBudget / kChunkBytesPerTriangle;
-    PrototypeBuilder protoBuilder(*s.writer, s.options.hierarchy, chunkTriangles, s.options.threads, s.tempDirectory);
+    PrototypeBuilder protoBuilder(
+            *s.writer, s.options.hierarchy, chunkTriangles, crownReserve, s.options.threads, s.tempDirectory);
     // Prototypes left without triangles get no record (a record needs a root node): the table
     // holds the others in declaration order, and storedIndex maps declared ids to it.
     constexpr std::uint32_t kNotStored = std::numeric_limits<std::uint32_t>::max();

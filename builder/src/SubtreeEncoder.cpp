@@ -11,8 +11,6 @@ namespace ff::builder {
 namespace {
 
 storage::NodeRecord toRecord(const BuildNode& node) {
-    if (node.external)
-        return *node.external;
     storage::NodeRecord r{};
     r.cellMin = {node.cellMin.x, node.cellMin.y, node.cellMin.z};
     r.cellMax = {node.cellMax.x, node.cellMax.y, node.cellMax.z};
@@ -30,8 +28,14 @@ storage::NodeRecord toRecord(const BuildNode& node) {
     return r;
 }
 
-bool isRelocatable(const storage::NodeRecord& r) {
-    return r.kind == static_cast<std::uint8_t>(storage::NodeKind::Cell);
+/** Shifts the relative page numbers of a Cell record (an Instance's geometryPage is an index). */
+void relocateRecord(storage::NodeRecord& record, std::uint64_t geometryBase, std::uint64_t nodeBase, bool children) {
+    if (record.kind != static_cast<std::uint8_t>(storage::NodeKind::Cell))
+        return;
+    if (children && record.childCount > 0)
+        record.firstChild.page += static_cast<std::uint32_t>(nodeBase);
+    if (record.geometryCount > 0)
+        record.geometryPage += static_cast<std::uint32_t>(geometryBase);
 }
 
 // Triangles arrive in depth-first order (a node's own triangles, then its children's). They are
@@ -43,18 +47,18 @@ bool isRelocatable(const storage::NodeRecord& r) {
 // around it, which the frame does not draw: 1% of the geometry bytes used at 16 M triangles
 // (docs/results/paging.md). Permutes in place through a 4-byte destination index per triangle,
 // within the builder's per-triangle memory plan; a subtree of 2^32 triangles or more keeps
-// depth-first order.
-void orderGeometryBreadthFirst(
+// depth-first order (false).
+bool orderGeometryBreadthFirst(
         std::vector<BuildNode>& nodes,
         std::span<const std::uint32_t> breadthFirst,
         std::vector<storage::PackedTriangle>& triangles) {
-    if (triangles.empty() || triangles.size() >= 0xFFFFFFFFull)
-        return;
+    if (triangles.size() >= 0xFFFFFFFFull)
+        return false;
     std::vector<std::uint32_t> destination(triangles.size());
     std::uint64_t cursor = 0;
     for (const std::uint32_t n : breadthFirst) {
         BuildNode& node = nodes[n];
-        if (node.external || node.triangleCount == 0)
+        if (node.triangleCount == 0)
             continue;
         for (std::uint64_t k = 0; k < node.triangleCount; ++k)
             destination[node.firstTriangle + k] = static_cast<std::uint32_t>(cursor + k);
@@ -69,6 +73,7 @@ void orderGeometryBreadthFirst(
             std::swap(destination[i], destination[j]);
         }
     }
+    return true;
 }
 
 } // namespace
@@ -82,96 +87,129 @@ EncodedSubtree encodeSubtree(
         std::vector<BuildNode> nodes,
         std::vector<storage::PackedTriangle> triangles,
         std::uint32_t pageSize,
-        bool placeRoot) {
+        std::uint64_t crownBudget) {
     FF_ASSERT(!nodes.empty());
     const std::uint32_t perPage = storage::nodesPerPage(pageSize);
     const std::uint32_t trianglesPerPage = storage::trianglesPerPage(pageSize);
 
+    // Breadth-first order of the whole subtree, each node once; levelEnd[d] is where level d
+    // ends in it.
+    std::vector<std::uint32_t> order; // node indices
+    order.reserve(nodes.size());
+    order.push_back(0);
+    std::vector<std::size_t> levelEnd;
+    for (std::size_t begin = 0; begin < order.size();) {
+        const std::size_t end = order.size();
+        for (std::size_t i = begin; i < end; ++i) {
+            const BuildNode& node = nodes[order[i]];
+            if (node.placedChildren)
+                continue;
+            for (std::uint32_t c = 0; c < node.childCount; ++c)
+                order.push_back(node.firstChild + c);
+        }
+        levelEnd.push_back(end);
+        begin = end;
+    }
+    // The crown: the root and the whole levels below it that fit the budget. Its lowest level
+    // starts at crownLowest in `order`; the children of that level and of every level below
+    // are placed here.
+    std::size_t crownSize = 0;
+    std::size_t crownLowest = 0;
+    for (std::size_t d = 0; d < levelEnd.size() && crownBudget > 0; ++d) {
+        if (d > 0 && levelEnd[d] > crownBudget)
+            break;
+        crownLowest = d == 0 ? 0 : levelEnd[d - 1];
+        crownSize = levelEnd[d];
+    }
+
+    // Pages fill with whole sibling blocks in breadth-first order: level by level, and within a
+    // level in octant (Morton) order, so a page holds one level of one neighbourhood. A frame's
+    // cut runs through the hierarchy at about one level per neighbourhood and refines every
+    // node above it, so the pages it needs are the levels down to the cut and hold few records
+    // it does not use; treelets (a subtree per page, several levels deep) would bring in the
+    // levels below the cut with them (measured in docs/results/paging.md: 22% of the node bytes
+    // used at 64 M triangles, against ~90%).
     struct Placement {
         std::uint32_t page = 0;
         std::uint32_t slot = 0;
     };
     std::vector<Placement> placement(nodes.size());
     std::vector<std::vector<std::uint32_t>> pages; // node indices per page
-
     auto placeBlock = [&](std::uint32_t first, std::uint32_t count) {
+        FF_ASSERT(count <= perPage);
+        if (pages.empty() || pages.back().size() + count > perPage)
+            pages.emplace_back();
         auto& page = pages.back();
         for (std::uint32_t i = 0; i < count; ++i) {
             placement[first + i] = {static_cast<std::uint32_t>(pages.size() - 1), static_cast<std::uint32_t>(page.size())};
             page.push_back(first + i);
         }
     };
-
-    // Pages fill with whole sibling blocks in breadth-first order of the whole subtree: level
-    // by level, and within a level in octant (Morton) order, so a page holds one level of one
-    // neighbourhood. A frame's cut runs through the hierarchy at about one level per
-    // neighbourhood and refines every node above it, so the pages it needs are the levels
-    // down to the cut and hold few records it does not use; treelets (a subtree per page,
-    // several levels deep) would bring in the levels below the cut with them (measured in
-    // docs/results/paging.md: 22% of the node bytes used at 64 M triangles, against ~90%).
-    std::vector<std::uint32_t> order; // breadth-first, each node once
-    order.reserve(nodes.size());
-    order.push_back(0);
-    if (placeRoot) {
-        pages.emplace_back();
+    if (crownSize == 0)
         placeBlock(0, 1);
-    }
-    for (std::size_t i = 0; i < order.size(); ++i) {
+    for (std::size_t i = crownLowest; i < order.size(); ++i) {
         const BuildNode& node = nodes[order[i]];
-        if (node.childCount == 0 || node.external)
-            continue;
-        FF_ASSERT(node.childCount <= perPage);
-        if (pages.empty() || pages.back().size() + node.childCount > perPage)
-            pages.emplace_back();
-        placeBlock(node.firstChild, node.childCount);
-        for (std::uint32_t c = 0; c < node.childCount; ++c)
-            order.push_back(node.firstChild + c);
+        if (node.childCount > 0 && !node.placedChildren)
+            placeBlock(node.firstChild, node.childCount);
     }
-
-    orderGeometryBreadthFirst(nodes, order, triangles);
 
     EncodedSubtree out;
+    const bool ordered = orderGeometryBreadthFirst(nodes, order, triangles);
+    // Crown nodes come first in breadth-first order, and so do their triangles.
+    std::uint64_t crownTriangleCount = 0;
+    for (std::size_t i = 0; i < crownSize; ++i)
+        crownTriangleCount += nodes[order[i]].triangleCount;
+    FF_ASSERT(ordered || crownTriangleCount == 0); // a crown comes from a chunk, far below 2^32 triangles
+    out.crownTriangles.assign(triangles.begin(), triangles.begin() + static_cast<std::ptrdiff_t>(crownTriangleCount));
+    triangles.erase(triangles.begin(), triangles.begin() + static_cast<std::ptrdiff_t>(crownTriangleCount));
+
     auto recordOf = [&](std::uint32_t n) {
         const BuildNode& node = nodes[n];
         storage::NodeRecord r = toRecord(node);
-        if (node.external)
-            return r;
-        if (node.childCount > 0) {
-            const Placement& p = placement[node.firstChild];
-            r.firstChild = {p.page, p.slot};
-        }
+        if (node.placedChildren)
+            r.firstChild = *node.placedChildren;
+        else if (node.childCount > 0)
+            r.firstChild = {placement[node.firstChild].page, placement[node.firstChild].slot};
         if (node.triangleCount > 0 && node.kind == static_cast<std::uint8_t>(storage::NodeKind::Cell)) {
-            r.geometryPage = static_cast<std::uint32_t>(node.firstTriangle / trianglesPerPage);
-            r.geometryFirst = static_cast<std::uint32_t>(node.firstTriangle % trianglesPerPage);
+            const std::uint64_t first = node.firstTriangle - crownTriangleCount;
+            r.geometryPage = static_cast<std::uint32_t>(first / trianglesPerPage);
+            r.geometryFirst = static_cast<std::uint32_t>(first % trianglesPerPage);
             r.geometryCount = static_cast<std::uint32_t>(node.triangleCount);
         }
-        out.maxLevel = std::max<std::uint32_t>(out.maxLevel, r.level);
         return r;
     };
     out.nodePages.resize(pages.size());
     for (std::size_t p = 0; p < pages.size(); ++p) {
         for (std::uint32_t n : pages[p]) {
-            out.nodePages[p].push_back({recordOf(n), nodes[n].external.has_value()});
+            out.nodePages[p].push_back({recordOf(n), nodes[n].placedChildren.has_value()});
             ++out.nodeCount;
         }
     }
-    out.root = recordOf(0);
-    if (placeRoot)
+    for (const BuildNode& node : nodes)
+        out.maxLevel = std::max<std::uint32_t>(out.maxLevel, node.level);
+
+    // The crown, renumbered in breadth-first order: children follow in the order their parents
+    // come, so a cursor over the positions after the root hands out each first child.
+    out.crown.reserve(crownSize);
+    std::size_t nextPosition = 1;
+    for (std::size_t i = 0; i < crownSize; ++i) {
+        BuildNode node = nodes[order[i]];
+        FF_ASSERT(!node.placedChildren); // only the tree above the crowns has placed children
+        if (node.childCount > 0 && i >= crownLowest) {
+            node.placedChildren = storage::NodeRef{placement[node.firstChild].page, placement[node.firstChild].slot};
+        } else if (node.childCount > 0) {
+            node.firstChild = static_cast<std::uint32_t>(nextPosition);
+            nextPosition += node.childCount;
+        }
+        out.crown.push_back(std::move(node));
+    }
+    if (crownSize == 0)
         out.rootRef = storage::NodeRef{0, 0};
     out.triangles = std::move(triangles);
     return out;
 }
 
-void relocateRecord(storage::NodeRecord& record, std::uint64_t geometryBase, std::uint64_t nodeBase) {
-    if (!isRelocatable(record))
-        return;
-    if (record.childCount > 0)
-        record.firstChild.page += static_cast<std::uint32_t>(nodeBase);
-    if (record.geometryCount > 0)
-        record.geometryPage += static_cast<std::uint32_t>(geometryBase);
-}
-
-Result<storage::NodeRecord> commitSubtree(storage::SceneWriter& writer, EncodedSubtree& subtree) {
+Status commitSubtree(storage::SceneWriter& writer, EncodedSubtree& subtree) {
     const std::uint32_t pageSize = writer.pageSize();
     const std::uint64_t perPage = storage::trianglesPerPage(pageSize);
     const std::uint64_t geometryBase = writer.nextPageIndex();
@@ -191,21 +229,21 @@ Result<storage::NodeRecord> commitSubtree(storage::SceneWriter& writer, EncodedS
         buffer.resize(page.size() * sizeof(storage::NodeRecord));
         for (std::size_t i = 0; i < page.size(); ++i) {
             storage::NodeRecord record = page[i].record;
-            if (!page[i].absolute)
-                relocateRecord(record, geometryBase, nodeBase);
+            relocateRecord(record, geometryBase, nodeBase, !page[i].childrenPlacedElsewhere);
             std::memcpy(buffer.data() + i * sizeof(storage::NodeRecord), &record, sizeof(record));
         }
         FF_RETURN_IF_ERROR(writer.appendPage(storage::PageType::Nodes, buffer).status());
     }
-    storage::NodeRecord root = subtree.root;
-    relocateRecord(root, geometryBase, nodeBase);
+    for (BuildNode& node : subtree.crown)
+        if (node.placedChildren)
+            node.placedChildren->page += static_cast<std::uint32_t>(nodeBase);
     if (subtree.rootRef)
         subtree.rootRef->page += static_cast<std::uint32_t>(nodeBase);
     // Free the memory, not just the elements: `= {}` picks operator=(initializer_list), which
     // keeps the capacity, and every committed chunk would stay resident until the build ends.
     subtree.triangles = std::vector<storage::PackedTriangle>();
     subtree.nodePages = std::vector<std::vector<EncodedSubtree::Slot>>();
-    return root;
+    return Status::ok();
 }
 
 } // namespace ff::builder

@@ -684,7 +684,7 @@ TEST(SceneBuilderTest, SameInputGivesByteIdenticalFiles) {
 /** Triangles per chunk for the minimum budget (SceneBuilder::finish, PrototypeBuilder.h). */
 std::uint64_t chunkTriangles(unsigned threads) {
     const std::uint64_t budget = SceneBuilder::kMinimumBudgetBytes;
-    return (budget - budget / 4) / threads / 160;
+    return (budget - budget / 4 - budget / 16) / threads / 160;
 }
 
 TEST(SceneBuilderTest, PrototypeLargerThanAChunkIsBuiltOutOfCore) {
@@ -704,6 +704,46 @@ TEST(SceneBuilderTest, PrototypeLargerThanAChunkIsBuiltOutOfCore) {
     buildOrFail(scene, dir / "b.ffs", smallOptions(kThreads));
     EXPECT_TRUE(readBytes(dir / "a.ffs") == readBytes(dir / "b.ffs"));
     EXPECT_EQ(listDirectory(dir), (std::vector<std::string>{"a.ffs", "b.ffs"}));
+}
+
+// Each chunk is written on its own, so without more care every chunk a coarse cut enters
+// costs fresh pages, however few of its records the cut needs: a cost that grows with the number
+// of chunks, that is with the scene (docs/results/paging.md). The builder lays each chunk's top
+// levels (its crown) out with the cells above the chunks instead. So walking the prototype
+// breadth-first, the levels down to one below the chunk roots (about 5 records per chunk for a
+// terrain, 6 with the cells above) fill their pages as if it had been built in one piece: a page
+// per nodesPerPage - 7 records (a sibling block of up to 8 that does not fit starts a page),
+// plus one for the root.
+TEST(SceneBuilderTest, ChunksTopLevelsSharePagesWithTheCellsAboveThem) {
+    const fs::path dir = freshTestDir();
+    constexpr unsigned kThreads = 4;
+    const BuildReport report = buildOrFail(generate("terrain:triangles=120000"), dir / "t.ffs", smallOptions(kThreads));
+    ASSERT_GE(report.chunks, 16u) << buildReportJson(report);
+    Result<std::unique_ptr<storage::SceneFile>> opened = storage::SceneFile::open(dir / "t.ffs");
+    ASSERT_TRUE(opened.isOk()) << opened.status().toString();
+    const storage::SceneFile& file = **opened;
+    const std::uint64_t perPage = storage::nodesPerPage(file.pageSize());
+
+    std::vector<storage::NodeRef> level = {file.prototypes()[0].root};
+    std::set<std::uint32_t> pages;
+    std::uint64_t nodes = 0;
+    int depth = 0;
+    while (!level.empty() && nodes + level.size() <= 6 * report.chunks) {
+        std::vector<storage::NodeRef> next;
+        for (const storage::NodeRef ref : level) {
+            Result<storage::NodeRecord> node = file.node(ref);
+            ASSERT_TRUE(node.isOk()) << node.status().toString();
+            pages.insert(ref.page);
+            for (std::uint32_t c = 0; c < node->childCount; ++c)
+                next.push_back(storage::SceneFile::childRef(*node, c));
+        }
+        nodes += level.size();
+        EXPECT_LE(pages.size(), (nodes + perPage - 8) / (perPage - 7) + 1)
+                << nodes << " records down to depth " << depth << ", " << report.chunks << " chunks";
+        level = std::move(next);
+        ++depth;
+    }
+    EXPECT_GT(nodes, 4 * report.chunks); // the walk reached below the chunk roots
 }
 
 // A triangle wider than a cell stops at it; when that cell is a chunk root it must go into the
