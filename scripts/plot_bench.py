@@ -142,7 +142,7 @@ def paging(data, out, name):
         if sel and "node_page_bytes" in sel[0]:
             ax.plot([float(r["triangles"]) for r in sel], [float(r["node_page_bytes"]) / 2**20 for r in sel], "--",
                     color=line.get_color(), alpha=0.7, label=family + ": node pages")
-    ax.axhline(64, color="k", linestyle=":", label="target: 64 MB at 10^9 triangles")
+    ax.axhline(64e6 / 2**20, color="k", linestyle=":", label="target: 64 MB (61 MiB) at 10^9 triangles")
     ax.set_xscale("log")
     ax.set_xlabel("triangles in the scene (log)")
     ax.set_ylabel("resident for one complete frame (MiB)")

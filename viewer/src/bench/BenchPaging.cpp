@@ -16,9 +16,13 @@ namespace {
 
 struct PagingParams {
     // Working set: forests and terrains of these sizes, one complete (--sync) frame each.
-    std::vector<std::int64_t> forestTrees = {1, 4, 16, 64, 256, 1024, 4096, 16384};
-    std::vector<std::int64_t> terrainTriangles = {1'000'000, 4'000'000, 16'000'000, 64'000'000};
+    std::vector<std::int64_t> forestTrees = {1, 4, 16, 64, 256, 1024, 4096, 16384, 65536};
+    std::vector<std::int64_t> terrainTriangles = {1'000'000, 4'000'000, 16'000'000, 64'000'000, 256'000'000};
     std::int64_t workingSetCacheMb = 4096;
+    // Terrains built with a small --memory-budget: many more chunks for their size, as many as
+    // a larger scene would have with the default budget (each chunk is a subtree of its own).
+    std::vector<std::int64_t> smallBudgetTriangles;
+    std::string smallBudget = "192MiB";
     // Teleports: a cold cache, asynchronous.
     std::int64_t teleportTriangles = 16'000'000;
     std::int64_t teleportFrames = 400;
@@ -40,18 +44,21 @@ Status runPaging(const PagingParams& p, const Scenario& scenario, const BenchOpt
     struct Step {
         std::string family;
         std::string spec;
+        std::string memoryBudget = "1GiB"; // the build's default
     };
     std::vector<Step> ladder;
     for (const std::int64_t trees : p.forestTrees)
         ladder.push_back({"forest", "forest:trees=" + std::to_string(trees)});
     for (const std::int64_t triangles : p.terrainTriangles)
         ladder.push_back({"terrain", "terrain:triangles=" + std::to_string(triangles)});
-    CsvTable workingSet({"family", "spec", "triangles", "file_bytes", "complete_frame_bytes", "node_page_bytes",
+    for (const std::int64_t triangles : p.smallBudgetTriangles)
+        ladder.push_back({"terrain, built in " + p.smallBudget, "terrain:triangles=" + std::to_string(triangles), p.smallBudget});
+    CsvTable workingSet({"family", "spec", "triangles", "file_bytes", "chunks", "complete_frame_bytes", "node_page_bytes",
                          "geometry_page_bytes", "nodes_visited", "triangles_drawn", "frame_ms"});
     for (const Step& step : ladder) {
         std::fprintf(stderr, "%s: working set of %s\n", prefix.c_str(), step.spec.c_str());
-        FF_RETURN_IF_ERROR(runChild({ff, "build", "-q", "--generate", step.spec, "-o", scene.string(), "--report",
-                                     (work / "report.json").string()})
+        FF_RETURN_IF_ERROR(runChild({ff, "build", "-q", "--generate", step.spec, "--memory-budget", step.memoryBudget,
+                                     "-o", scene.string(), "--report", (work / "report.json").string()})
                                    .status());
         // One view, the same in scene radii for every size: the orbit's first frame.
         FF_RETURN_IF_ERROR(runChild({ff, "path", "orbit", scene.string(), "-o", path.string(), "--frames", "1"}).status());
@@ -62,6 +69,7 @@ Status runPaging(const PagingParams& p, const Scenario& scenario, const BenchOpt
         FF_ASSIGN_OR_RETURN(const nlohmann::json s, readJsonObject(summary, "replay summary"));
         workingSet.addRow({step.family, step.spec, std::to_string(report.value("instanced_triangles", std::uint64_t{0})),
                            std::to_string(report["bytes"].value("file", std::uint64_t{0})),
+                           std::to_string(report.value("chunks", std::uint64_t{0})),
                            std::to_string(s.value("peak_resident_bytes", std::uint64_t{0})),
                            std::to_string(s.value("frame_node_bytes", std::uint64_t{0})),
                            std::to_string(s.value("frame_geometry_bytes", std::uint64_t{0})),
@@ -113,6 +121,10 @@ Result<BenchRun> preparePaging(const Scenario& scenario) {
     p.forestTrees = ws.ladder("forest_trees", p.forestTrees);
     p.terrainTriangles = ws.ladder("terrain_triangles", p.terrainTriangles);
     p.workingSetCacheMb = ws.integer("cache_mb", p.workingSetCacheMb);
+    ScenarioReader small = ws.object("small_budget");
+    if (small.has("terrain_triangles"))
+        p.smallBudgetTriangles = small.ladder("terrain_triangles", {});
+    p.smallBudget = small.string("memory_budget", p.smallBudget);
     ScenarioReader tp = reader.object("teleports");
     p.teleportTriangles = tp.integer("terrain_triangles", p.teleportTriangles);
     p.teleportFrames = tp.integer("frames", p.teleportFrames);
