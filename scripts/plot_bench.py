@@ -134,7 +134,7 @@ def build(data, out, name):
 
 
 def paging(data, out, name):
-    fig, ax = plt.subplots(figsize=(6.5, 4.5))
+    fig, ax = plt.subplots(figsize=(6.5, 5.5))
     for family in sorted({r["family"] for r in data}):
         sel = [r for r in data if r["family"] == family]
         line, = ax.plot([float(r["triangles"]) for r in sel], [float(r["complete_frame_bytes"]) / 2**20 for r in sel],
@@ -148,7 +148,7 @@ def paging(data, out, name):
     ax.set_ylabel("resident for one complete frame (MiB)")
     ax.set_title("working set against scene size")
     ax.grid(True, which="both", alpha=0.3)
-    ax.legend(fontsize=8)
+    ax.legend(fontsize=8, loc="upper center", bbox_to_anchor=(0.5, -0.14), ncol=2)
     fig.tight_layout()
     fig.savefig(out / f"{name}.png", dpi=110)
 
