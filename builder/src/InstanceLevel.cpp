@@ -238,7 +238,7 @@ Result<InstanceLevelResult> buildInstanceLevel(
     result.boundsMin = nodes[0].boundsMin;
     result.boundsMax = nodes[0].boundsMax;
     result.depth = octree.depth();
-    EncodedSubtree encoded = encodeSubtree(std::move(nodes), {}, writer.pageSize(), 0);
+    EncodedSubtree encoded = encodeSubtree(std::move(nodes), {}, writer.pageSize(), CrownBudget{});
     result.nodes = encoded.nodeCount;
     result.nodePages = encoded.nodePages.size();
     FF_RETURN_IF_ERROR(commitSubtree(writer, encoded));

@@ -12,6 +12,12 @@
 
 namespace ff::builder {
 
+/** Where a triangle run starts: a Geometry page and a slot in it (storage/FORMAT.md §6). */
+struct TriangleSlot {
+    std::uint32_t page = 0;
+    std::uint32_t slot = 0;
+};
+
 /** A node while the builder holds it in memory. Children of a node are contiguous. */
 struct BuildNode {
     glm::vec3 cellMin{0.0f};
@@ -31,6 +37,10 @@ struct BuildNode {
     /** Set when the node's children are already written (a chunk crown's lowest level): the
      *  ref of the first child, final once the chunk is committed; `firstChild` is unused. */
     std::optional<storage::NodeRef> placedChildren;
+    /** Set when the node's own triangles are already written (a crown node whose triangles did
+     *  not fit the crown's budget): where their run starts, final once the chunk is
+     *  committed; `firstTriangle` is unused. */
+    std::optional<TriangleSlot> placedTriangles;
 };
 
 /** An octree cell: a cube. */

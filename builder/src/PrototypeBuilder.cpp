@@ -75,7 +75,7 @@ ChunkOutput buildChunk(
         const Cell& cell,
         int level,
         int octant,
-        std::uint64_t crownBudget,
+        CrownBudget crownBudget,
         const HierarchyParams& params,
         std::uint32_t pageSize) {
     CubeBaker baker(params.bakeResolution);
@@ -140,7 +140,7 @@ Result<PrototypeBuildResult> PrototypeBuilder::build(
 Result<PrototypeBuildResult> PrototypeBuilder::buildInMemory(RunFile& triangles, const Cell& root) {
     FF_ASSIGN_OR_RETURN(std::vector<storage::PackedTriangle> all, triangles.readAll());
     triangles.remove();
-    ChunkOutput chunk = buildChunk(std::move(all), root, 0, 0, 0, mParams, mWriter.pageSize());
+    ChunkOutput chunk = buildChunk(std::move(all), root, 0, 0, CrownBudget{}, mParams, mWriter.pageSize());
     PrototypeBuildResult result;
     result.geometryPages = chunk.encoded.geometryPageCount(mWriter.pageSize());
     result.nodePages = chunk.encoded.nodePages.size();
@@ -290,13 +290,16 @@ Result<PrototypeBuildResult> PrototypeBuilder::buildChunked(
     // grows with the number of chunks, that is with the scene (docs/results/paging.md). So
     // each chunk's top levels, its crown, wait in memory and are laid out with the cells above
     // the chunks: the coarse levels of the whole prototype then share pages in one
-    // breadth-first order, as if it had been built in one piece. A crown holds at most a page
-    // of records (a chunk's own pages then start at a level that fills pages) and at least
-    // the chunk's root.
-    const std::uint64_t crownBudget = std::clamp<std::uint64_t>(
-            mCrownBytes / std::max<std::size_t>(chunkNodes.size(), 1) / sizeof(BuildNode),
-            1,
-            storage::nodesPerPage(mWriter.pageSize()));
+    // breadth-first order, as if it had been built in one piece. A crown holds at least the
+    // chunk's root and at most a page of records (a chunk's own pages then start at a level
+    // that fills pages), in up to half its share of the memory; its triangles take the rest
+    // of that share, and those that do not fit stay in the chunk.
+    const std::uint64_t crownShare = mCrownBytes / std::max<std::size_t>(chunkNodes.size(), 1);
+    CrownBudget crownBudget;
+    crownBudget.nodes = std::clamp<std::uint64_t>(crownShare / 2 / sizeof(BuildNode), 1, storage::nodesPerPage(mWriter.pageSize()));
+    crownBudget.triangles = crownShare > crownBudget.nodes * sizeof(BuildNode)
+            ? (crownShare - crownBudget.nodes * sizeof(BuildNode)) / sizeof(storage::PackedTriangle)
+            : 0;
     PrototypeBuildResult result;
     result.chunks = chunkNodes.size();
     std::vector<ChunkOutput> finished(chunkNodes.size());
@@ -401,7 +404,8 @@ Result<PrototypeBuildResult> PrototypeBuilder::buildChunked(
             BuildNode node = std::move(chunk.crown[k]);
             if (node.childCount > 0 && !node.placedChildren)
                 node.firstChild = static_cast<std::uint32_t>(base + node.firstChild);
-            node.firstTriangle += triangleBase;
+            if (!node.placedTriangles)
+                node.firstTriangle += triangleBase;
             if (k == 0)
                 nodes[i] = std::move(node);
             else
@@ -412,7 +416,7 @@ Result<PrototypeBuildResult> PrototypeBuilder::buildChunked(
         chunk.crown = std::vector<BuildNode>();
         chunk.crownTriangles = std::vector<storage::PackedTriangle>();
     }
-    EncodedSubtree encoded = encodeSubtree(std::move(nodes), std::move(ownTriangles), mWriter.pageSize(), 0);
+    EncodedSubtree encoded = encodeSubtree(std::move(nodes), std::move(ownTriangles), mWriter.pageSize(), CrownBudget{});
     result.geometryPages += encoded.geometryPageCount(mWriter.pageSize());
     result.nodePages += encoded.nodePages.size();
     result.nodes += encoded.nodeCount - crownNodes; // crowns were counted with their chunks

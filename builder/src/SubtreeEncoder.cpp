@@ -29,12 +29,12 @@ storage::NodeRecord toRecord(const BuildNode& node) {
 }
 
 /** Shifts the relative page numbers of a Cell record (an Instance's geometryPage is an index). */
-void relocateRecord(storage::NodeRecord& record, std::uint64_t geometryBase, std::uint64_t nodeBase, bool children) {
+void relocateRecord(storage::NodeRecord& record, std::uint64_t geometryBase, std::uint64_t nodeBase, const EncodedSubtree::Slot& slot) {
     if (record.kind != static_cast<std::uint8_t>(storage::NodeKind::Cell))
         return;
-    if (children && record.childCount > 0)
+    if (!slot.childrenPlacedElsewhere && record.childCount > 0)
         record.firstChild.page += static_cast<std::uint32_t>(nodeBase);
-    if (record.geometryCount > 0)
+    if (!slot.trianglesPlacedElsewhere && record.geometryCount > 0)
         record.geometryPage += static_cast<std::uint32_t>(geometryBase);
 }
 
@@ -58,7 +58,7 @@ bool orderGeometryBreadthFirst(
     std::uint64_t cursor = 0;
     for (const std::uint32_t n : breadthFirst) {
         BuildNode& node = nodes[n];
-        if (node.triangleCount == 0)
+        if (node.triangleCount == 0 || node.placedTriangles)
             continue;
         for (std::uint64_t k = 0; k < node.triangleCount; ++k)
             destination[node.firstTriangle + k] = static_cast<std::uint32_t>(cursor + k);
@@ -87,7 +87,7 @@ EncodedSubtree encodeSubtree(
         std::vector<BuildNode> nodes,
         std::vector<storage::PackedTriangle> triangles,
         std::uint32_t pageSize,
-        std::uint64_t crownBudget) {
+        CrownBudget crownBudget) {
     FF_ASSERT(!nodes.empty());
     const std::uint32_t perPage = storage::nodesPerPage(pageSize);
     const std::uint32_t trianglesPerPage = storage::trianglesPerPage(pageSize);
@@ -115,8 +115,8 @@ EncodedSubtree encodeSubtree(
     // are placed here.
     std::size_t crownSize = 0;
     std::size_t crownLowest = 0;
-    for (std::size_t d = 0; d < levelEnd.size() && crownBudget > 0; ++d) {
-        if (d > 0 && levelEnd[d] > crownBudget)
+    for (std::size_t d = 0; d < levelEnd.size() && crownBudget.nodes > 0; ++d) {
+        if (d > 0 && levelEnd[d] > crownBudget.nodes)
             break;
         crownLowest = d == 0 ? 0 : levelEnd[d - 1];
         crownSize = levelEnd[d];
@@ -155,13 +155,38 @@ EncodedSubtree encodeSubtree(
 
     EncodedSubtree out;
     const bool ordered = orderGeometryBreadthFirst(nodes, order, triangles);
-    // Crown nodes come first in breadth-first order, and so do their triangles.
-    std::uint64_t crownTriangleCount = 0;
+    // Crown nodes come first in breadth-first order, and so do their triangles: the first
+    // `crownSpan`. Those that fit the budget move to crownTriangles, in the same order; the
+    // others close up at the front and stay with the subtree (placedTriangles).
+    std::uint64_t crownSpan = 0;
     for (std::size_t i = 0; i < crownSize; ++i)
-        crownTriangleCount += nodes[order[i]].triangleCount;
-    FF_ASSERT(ordered || crownTriangleCount == 0); // a crown comes from a chunk, far below 2^32 triangles
-    out.crownTriangles.assign(triangles.begin(), triangles.begin() + static_cast<std::ptrdiff_t>(crownTriangleCount));
-    triangles.erase(triangles.begin(), triangles.begin() + static_cast<std::ptrdiff_t>(crownTriangleCount));
+        crownSpan += nodes[order[i]].triangleCount;
+    FF_ASSERT(ordered || crownSpan == 0); // a crown comes from a chunk, far below 2^32 triangles
+    std::uint64_t kept = 0;
+    std::vector<bool> keptInSubtree(crownSize, false);
+    for (std::size_t i = 0; i < crownSize; ++i) {
+        BuildNode& node = nodes[order[i]];
+        if (node.triangleCount == 0)
+            continue;
+        const auto first = triangles.begin() + static_cast<std::ptrdiff_t>(node.firstTriangle);
+        const auto last = first + static_cast<std::ptrdiff_t>(node.triangleCount);
+        if (out.crownTriangles.size() + node.triangleCount <= crownBudget.triangles) {
+            node.firstTriangle = out.crownTriangles.size();
+            out.crownTriangles.insert(out.crownTriangles.end(), first, last);
+        } else {
+            if (kept != node.firstTriangle) // kept < firstTriangle: a move to the front
+                std::move(first, last, triangles.begin() + static_cast<std::ptrdiff_t>(kept));
+            node.firstTriangle = kept;
+            kept += node.triangleCount;
+            keptInSubtree[i] = true;
+        }
+    }
+    const std::uint64_t moved = crownSpan - kept;
+    triangles.erase(triangles.begin() + static_cast<std::ptrdiff_t>(kept), triangles.begin() + static_cast<std::ptrdiff_t>(crownSpan));
+    auto runStart = [&](std::uint64_t firstTriangle) {
+        return TriangleSlot{static_cast<std::uint32_t>(firstTriangle / trianglesPerPage),
+                            static_cast<std::uint32_t>(firstTriangle % trianglesPerPage)};
+    };
 
     auto recordOf = [&](std::uint32_t n) {
         const BuildNode& node = nodes[n];
@@ -171,9 +196,9 @@ EncodedSubtree encodeSubtree(
         else if (node.childCount > 0)
             r.firstChild = {placement[node.firstChild].page, placement[node.firstChild].slot};
         if (node.triangleCount > 0 && node.kind == static_cast<std::uint8_t>(storage::NodeKind::Cell)) {
-            const std::uint64_t first = node.firstTriangle - crownTriangleCount;
-            r.geometryPage = static_cast<std::uint32_t>(first / trianglesPerPage);
-            r.geometryFirst = static_cast<std::uint32_t>(first % trianglesPerPage);
+            const TriangleSlot start = node.placedTriangles ? *node.placedTriangles : runStart(node.firstTriangle - moved);
+            r.geometryPage = start.page;
+            r.geometryFirst = start.slot;
             r.geometryCount = static_cast<std::uint32_t>(node.triangleCount);
         }
         return r;
@@ -181,7 +206,7 @@ EncodedSubtree encodeSubtree(
     out.nodePages.resize(pages.size());
     for (std::size_t p = 0; p < pages.size(); ++p) {
         for (std::uint32_t n : pages[p]) {
-            out.nodePages[p].push_back({recordOf(n), nodes[n].placedChildren.has_value()});
+            out.nodePages[p].push_back({recordOf(n), nodes[n].placedChildren.has_value(), nodes[n].placedTriangles.has_value()});
             ++out.nodeCount;
         }
     }
@@ -194,7 +219,9 @@ EncodedSubtree encodeSubtree(
     std::size_t nextPosition = 1;
     for (std::size_t i = 0; i < crownSize; ++i) {
         BuildNode node = nodes[order[i]];
-        FF_ASSERT(!node.placedChildren); // only the tree above the crowns has placed children
+        FF_ASSERT(!node.placedChildren && !node.placedTriangles); // only the tree above the crowns has those
+        if (keptInSubtree[i])
+            node.placedTriangles = runStart(node.firstTriangle);
         if (node.childCount > 0 && i >= crownLowest) {
             node.placedChildren = storage::NodeRef{placement[node.firstChild].page, placement[node.firstChild].slot};
         } else if (node.childCount > 0) {
@@ -229,14 +256,17 @@ Status commitSubtree(storage::SceneWriter& writer, EncodedSubtree& subtree) {
         buffer.resize(page.size() * sizeof(storage::NodeRecord));
         for (std::size_t i = 0; i < page.size(); ++i) {
             storage::NodeRecord record = page[i].record;
-            relocateRecord(record, geometryBase, nodeBase, !page[i].childrenPlacedElsewhere);
+            relocateRecord(record, geometryBase, nodeBase, page[i]);
             std::memcpy(buffer.data() + i * sizeof(storage::NodeRecord), &record, sizeof(record));
         }
         FF_RETURN_IF_ERROR(writer.appendPage(storage::PageType::Nodes, buffer).status());
     }
-    for (BuildNode& node : subtree.crown)
+    for (BuildNode& node : subtree.crown) {
         if (node.placedChildren)
             node.placedChildren->page += static_cast<std::uint32_t>(nodeBase);
+        if (node.placedTriangles)
+            node.placedTriangles->page += static_cast<std::uint32_t>(geometryBase);
+    }
     if (subtree.rootRef)
         subtree.rootRef->page += static_cast<std::uint32_t>(nodeBase);
     // Free the memory, not just the elements: `= {}` picks operator=(initializer_list), which

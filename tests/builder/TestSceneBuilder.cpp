@@ -768,6 +768,31 @@ TEST(SceneBuilderTest, LargeTriangleAloneInAChunkCellIsStored) {
     expectSceneMatches(dir / "scene.ffs", scene, report);
 }
 
+// A chunk's crown waits in memory for the tree above the chunks, with its triangles while they fit
+// the crown's share of the budget. Triangles beyond it (here 2,000 that all stop at one chunk's
+// root, against a share of ~900) stay in the chunk's own pages, and the crown's record must point
+// there.
+TEST(SceneBuilderTest, CrownTrianglesBeyondTheCrownBudgetStayWithTheirChunk) {
+    const fs::path dir = freshTestDir();
+    constexpr unsigned kThreads = 1;
+    const std::size_t clusterSize = chunkTriangles(kThreads) + chunkTriangles(kThreads) / 4;
+    std::vector<storage::PackedTriangle> triangles = cluster(clusterSize, glm::vec3(0.0f), glm::vec3(0.4f), 1);
+    const auto far = cluster(clusterSize, glm::vec3(1.6f), glm::vec3(2.0f), 2);
+    triangles.insert(triangles.end(), far.begin(), far.end());
+    // Centroids in octant 3 (x+, y+, z-), 1.05 wide: wider than that octant's 1.0 cell, so all
+    // of them stop at the root of the chunk that octant becomes.
+    constexpr int kLarge = 2000;
+    for (int k = 0; k < kLarge; ++k) {
+        const float dz = 1e-4f * static_cast<float>(k);
+        triangles.push_back(packTriangle(
+                vertexAt({0.95f, 1.3f, 0.3f + dz}), vertexAt({2.0f, 1.5f, 0.4f + dz}), vertexAt({1.2f, 1.4f, 0.2f + dz})));
+    }
+    const RecordingSink scene = singlePrototypeScene(triangles);
+    const BuildReport report = buildOrFail(scene, dir / "scene.ffs", smallOptions(kThreads));
+    EXPECT_GT(report.chunks, 2u);
+    expectSceneMatches(dir / "scene.ffs", scene, report);
+}
+
 // A counted cell whose only triangle stops in a cell above it must not become an empty chunk.
 TEST(SceneBuilderTest, CellWhoseTrianglesStopAboveItBecomesNoChunk) {
     const fs::path dir = freshTestDir();
