@@ -14,8 +14,9 @@ namespace ff::builder {
 
 /**
  * A subtree ready to be written: geometry pages first, then node pages. Page numbers inside
- * (NodeRecord::firstChild.page, geometryPage of Cell nodes, the crown's placedChildren) are
- * relative to the subtree's first page until commitSubtree() relocates them.
+ * (NodeRecord::firstChild.page, geometryPage of Cell nodes, the crown's placedChildren and
+ * placedTriangles) are relative to the subtree's first page until commitSubtree() relocates
+ * them.
  *
  * The crown is the subtree's top levels, held back for the tree above (a chunk's crown is laid
  * out with the cells above the chunks): crown[0] is the root, children are contiguous, a crown
