@@ -769,9 +769,9 @@ TEST(SceneBuilderTest, LargeTriangleAloneInAChunkCellIsStored) {
 }
 
 // A chunk's crown waits in memory for the tree above the chunks, with its triangles while they fit
-// the crown's share of the budget. Triangles beyond it (here 2,000 that all stop at one chunk's
-// root, against a share of ~900) stay in the chunk's own pages, and the crown's record must point
-// there.
+// the crown's share of the budget (budget/16 over the chunks). Triangles beyond it (here 2,000
+// that all stop at one chunk's root, more bytes than the whole share) stay in the chunk's own
+// pages, and the crown's record must point there.
 TEST(SceneBuilderTest, CrownTrianglesBeyondTheCrownBudgetStayWithTheirChunk) {
     const fs::path dir = freshTestDir();
     constexpr unsigned kThreads = 1;
@@ -790,6 +790,7 @@ TEST(SceneBuilderTest, CrownTrianglesBeyondTheCrownBudgetStayWithTheirChunk) {
     const RecordingSink scene = singlePrototypeScene(triangles);
     const BuildReport report = buildOrFail(scene, dir / "scene.ffs", smallOptions(kThreads));
     EXPECT_GT(report.chunks, 2u);
+    ASSERT_GT(kLarge * sizeof(storage::PackedTriangle), SceneBuilder::kMinimumBudgetBytes / 16 / report.chunks);
     expectSceneMatches(dir / "scene.ffs", scene, report);
 }
 
