@@ -122,7 +122,7 @@ CommandRunner addRenderCommand(CLI::App& app) {
     cmd->add_option("scene", args->scene, "Scene file (.ffs)")->required();
     cmd->add_option("-o,--output", args->output, "Image to write (.png, .exr, .tif, ...)");
     cmd->add_option("--size", args->size, "Image size WIDTHxHEIGHT")->capture_default_str();
-    cmd->add_option("--epsilon", args->epsilon, "Cells smaller than this many pixels are drawn as color cubes (0: all geometry)")->capture_default_str();
+    cmd->add_option("--epsilon", args->epsilon, "A cell whose box covers less than epsilon^2 pixels on screen is drawn as its color cube (0: all geometry)")->capture_default_str();
     cmd->add_option("--method", args->method, "hierarchical or full (every triangle, no hierarchy)")->capture_default_str();
     cmd->add_option("--cube-draw", args->cubeDraw, "Color cubes as faces, points (one splat per cube) or auto (points when epsilon <= 2)")
             ->capture_default_str()

@@ -370,7 +370,7 @@ CommandRunner addReplayCommand(CLI::App& app) {
     cmd->add_option("--gpu-budget", args->gpuBudget, "GPU memory for geometry pages")->capture_default_str();
     cmd->add_flag("--sync", args->sync, "Wait for every page a frame wants (deterministic reference; counts stalls)");
     cmd->add_option("--size", args->size, "Image size WIDTHxHEIGHT")->capture_default_str();
-    cmd->add_option("--epsilon", args->epsilon, "Color-cube threshold in pixels")->capture_default_str();
+    cmd->add_option("--epsilon", args->epsilon, "A cell whose box covers less than epsilon^2 pixels on screen is drawn as its color cube")->capture_default_str();
     cmd->add_option("--cube-anisotropy", args->cubeAnisotropy,
                     "Refuse colour cubes whose coverage differs more than this between axes (0..1; 1 = never)")
             ->check(CLI::Range(0.0f, 1.0f))

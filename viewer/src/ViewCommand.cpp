@@ -339,7 +339,7 @@ CommandRunner addViewCommand(CLI::App& app) {
     cmd->add_option(
                "--epsilon",
                args->epsilon,
-               "Cells smaller than this many pixels are drawn as color cubes (0: all geometry)")
+               "A cell whose box covers less than epsilon^2 pixels on screen is drawn as its color cube (0: all geometry)")
             ->capture_default_str();
     cmd->add_option("--method", args->method, "hierarchical or full (every triangle, no hierarchy)")
             ->capture_default_str();
