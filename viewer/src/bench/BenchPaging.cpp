@@ -5,6 +5,7 @@
 
 #include "BenchSupport.h"
 #include "Benchmarks.h"
+#include "ScenarioParts.h"
 
 #include <nlohmann/json.hpp>
 
@@ -61,7 +62,11 @@ Status runPaging(const PagingParams& p, const Scenario& scenario, const BenchOpt
                                      "-o", scene.string(), "--report", (work / "report.json").string()})
                                    .status());
         // One view, the same in scene radii for every size: the orbit's first frame.
-        FF_RETURN_IF_ERROR(runChild({ff, "path", "orbit", scene.string(), "-o", path.string(), "--frames", "1"}).status());
+        PathSpec orbit{.generator = "orbit", .options = {}};
+        orbit.options.frames = 1;
+        std::vector<std::string> orbitArgs = orbit.commandArgs(scene, path);
+        orbitArgs.insert(orbitArgs.begin(), ff);
+        FF_RETURN_IF_ERROR(runChild(orbitArgs).status());
         FF_RETURN_IF_ERROR(runChild({ff, "replay", scene.string(), path.string(), "--sync", "--cache-mb", std::to_string(p.workingSetCacheMb),
                                      "--summary", summary.string()})
                                    .status());
@@ -85,10 +90,13 @@ Status runPaging(const PagingParams& p, const Scenario& scenario, const BenchOpt
     const std::string teleports = std::to_string(p.teleports);
     std::fprintf(stderr, "%s: %s teleports across %s\n", prefix.c_str(), teleports.c_str(), terrain.c_str());
     FF_RETURN_IF_ERROR(runChild({ff, "build", "-q", "--generate", terrain, "-o", scene.string()}).status());
-    FF_RETURN_IF_ERROR(runChild({ff, "path", "teleports", scene.string(), "-o", path.string(), "--frames",
-                                 std::to_string(p.teleportFrames), "--teleports", teleports, "--seed",
-                                 std::to_string(p.teleportSeed)})
-                               .status());
+    PathSpec jumps{.generator = "teleports", .options = {}};
+    jumps.options.frames = p.teleportFrames;
+    jumps.options.teleports = p.teleports;
+    jumps.options.seed = static_cast<std::uint64_t>(p.teleportSeed);
+    std::vector<std::string> jumpArgs = jumps.commandArgs(scene, path);
+    jumpArgs.insert(jumpArgs.begin(), ff);
+    FF_RETURN_IF_ERROR(runChild(jumpArgs).status());
     const std::filesystem::path frames = options.outDir / (prefix + "-teleports.csv");
     const std::filesystem::path teleportSummary = options.outDir / (prefix + "-teleports-summary.json");
     FF_RETURN_IF_ERROR(runChild({ff, "replay", scene.string(), path.string(), "--cache-mb",
