@@ -238,11 +238,11 @@ Result<InstanceLevelResult> buildInstanceLevel(
     result.boundsMin = nodes[0].boundsMin;
     result.boundsMax = nodes[0].boundsMax;
     result.depth = octree.depth();
-    EncodedSubtree encoded = encodeSubtree(std::move(nodes), {}, writer.pageSize(), CrownBudget{});
+    EncodedSubtree encoded = encodeSubtree(std::move(nodes), {}, writer.pageSize());
     result.nodes = encoded.nodeCount;
     result.nodePages = encoded.nodePages.size();
     FF_RETURN_IF_ERROR(commitSubtree(writer, encoded));
-    result.root = *encoded.rootRef;
+    result.root = encoded.rootRef;
     return result;
 }
 

@@ -1,5 +1,6 @@
 #include "PrototypeBuilder.h"
 
+#include "LevelRegions.h"
 #include "SubtreeEncoder.h"
 
 #include <algorithm>
@@ -14,7 +15,7 @@ namespace ff::builder {
 namespace {
 
 struct ChunkOutput {
-    EncodedSubtree encoded;
+    LevelledSubtree encoded;
     ColorCube rootCube;
     glm::vec3 boundsMin{0.0f};
     glm::vec3 boundsMax{0.0f};
@@ -69,25 +70,45 @@ void addToSummary(const BuildNode& node, PrototypeSummary& summary) {
         summary.cuts[static_cast<std::size_t>(l)].push_back({node.cellMin, node.cellMax, node.cube});
 }
 
-// Builds one chunk completely in memory. Runs on worker threads: touches only its arguments.
+/** An octree as built, before its layout: what the tree above it and the report need. */
+struct BuiltOctree {
+    std::vector<BuildNode> nodes;
+    ColorCube rootCube;
+    glm::vec3 boundsMin{0.0f};
+    glm::vec3 boundsMax{0.0f};
+    PrototypeSummary summary;
+};
+
+// Builds one octree completely in memory. Runs on worker threads: touches only its arguments.
+BuiltOctree buildInMemoryOctree(
+        std::vector<storage::PackedTriangle>& triangles, const Cell& cell, int level, int octant, const HierarchyParams& params) {
+    CubeBaker baker(params.bakeResolution);
+    BuiltOctree out;
+    out.nodes = buildOctree(triangles, cell, level, octant, params, baker);
+    out.rootCube = out.nodes[0].cube;
+    out.boundsMin = out.nodes[0].boundsMin;
+    out.boundsMax = out.nodes[0].boundsMax;
+    for (const BuildNode& node : out.nodes)
+        addToSummary(node, out.summary);
+    return out;
+}
+
+// Builds one chunk and lays it out level by level. Runs on worker threads.
 ChunkOutput buildChunk(
         std::vector<storage::PackedTriangle> triangles,
         const Cell& cell,
         int level,
         int octant,
         CrownBudget crownBudget,
-        const HierarchyParams& params,
-        std::uint32_t pageSize) {
-    CubeBaker baker(params.bakeResolution);
-    std::vector<BuildNode> nodes = buildOctree(triangles, cell, level, octant, params, baker);
+        const HierarchyParams& params) {
+    BuiltOctree octree = buildInMemoryOctree(triangles, cell, level, octant, params);
     ChunkOutput out;
-    out.rootCube = nodes[0].cube;
-    out.boundsMin = nodes[0].boundsMin;
-    out.boundsMax = nodes[0].boundsMax;
-    out.nodes = nodes.size();
-    for (const BuildNode& node : nodes)
-        addToSummary(node, out.summary);
-    out.encoded = encodeSubtree(std::move(nodes), std::move(triangles), pageSize, crownBudget);
+    out.rootCube = octree.rootCube;
+    out.boundsMin = octree.boundsMin;
+    out.boundsMax = octree.boundsMax;
+    out.summary = std::move(octree.summary);
+    out.nodes = octree.nodes.size();
+    out.encoded = encodeLevels(std::move(octree.nodes), std::move(triangles), crownBudget);
     out.maxDepth = out.encoded.maxLevel;
     return out;
 }
@@ -109,7 +130,8 @@ PrototypeBuilder::PrototypeBuilder(
         std::filesystem::path tempDirectory)
     : mWriter(writer)
     , mParams(params)
-    , mChunkTriangles(std::max<std::uint64_t>(chunkTriangles, 1024))
+    // Below 2^32: the encoder orders a chunk's triangles through 32-bit indices (encodeLevels).
+    , mChunkTriangles(std::clamp<std::uint64_t>(chunkTriangles, 1024, 0xFFFFFFFEull))
     , mCrownBytes(crownBytes)
     , mThreads(std::max(threads, 1u))
     , mTempDirectory(std::move(tempDirectory)) {}
@@ -140,18 +162,19 @@ Result<PrototypeBuildResult> PrototypeBuilder::build(
 Result<PrototypeBuildResult> PrototypeBuilder::buildInMemory(RunFile& triangles, const Cell& root) {
     FF_ASSIGN_OR_RETURN(std::vector<storage::PackedTriangle> all, triangles.readAll());
     triangles.remove();
-    ChunkOutput chunk = buildChunk(std::move(all), root, 0, 0, CrownBudget{}, mParams, mWriter.pageSize());
+    BuiltOctree octree = buildInMemoryOctree(all, root, 0, 0, mParams);
     PrototypeBuildResult result;
-    result.geometryPages = chunk.encoded.geometryPageCount(mWriter.pageSize());
-    result.nodePages = chunk.encoded.nodePages.size();
-    FF_RETURN_IF_ERROR(commitSubtree(mWriter, chunk.encoded));
-    result.record.root = *chunk.encoded.rootRef;
-    result.record.boundsMin = {chunk.boundsMin.x, chunk.boundsMin.y, chunk.boundsMin.z};
-    result.record.boundsMax = {chunk.boundsMax.x, chunk.boundsMax.y, chunk.boundsMax.z};
-    result.record.nodeCount = chunk.nodes;
-    result.summary = std::move(chunk.summary);
-    result.nodes = chunk.nodes;
-    result.maxDepth = chunk.maxDepth;
+    result.nodes = octree.nodes.size();
+    EncodedSubtree encoded = encodeSubtree(std::move(octree.nodes), std::move(all), mWriter.pageSize());
+    result.geometryPages = encoded.geometryPageCount(mWriter.pageSize());
+    result.nodePages = encoded.nodePages.size();
+    FF_RETURN_IF_ERROR(commitSubtree(mWriter, encoded));
+    result.record.root = encoded.rootRef;
+    result.record.boundsMin = {octree.boundsMin.x, octree.boundsMin.y, octree.boundsMin.z};
+    result.record.boundsMax = {octree.boundsMax.x, octree.boundsMax.y, octree.boundsMax.z};
+    result.record.nodeCount = result.nodes;
+    result.summary = std::move(octree.summary);
+    result.maxDepth = encoded.maxLevel;
     result.chunks = 1;
     return result;
 }
@@ -284,16 +307,16 @@ Result<PrototypeBuildResult> PrototypeBuilder::buildChunked(
         spillBytes += file.bytesWritten();
     }
 
-    // ---- build chunks on worker threads, commit in chunk order (deterministic output) -------
+    // ---- build chunks on worker threads, place them in chunk order (deterministic output) ---
     // A chunk written on its own starts new pages: each chunk a frame enters would cost at
     // least a node page and a geometry page however little of it the frame needs, a cost that
-    // grows with the number of chunks, that is with the scene (docs/results/paging.md). So
-    // each chunk's top levels, its crown, wait in memory and are laid out with the cells above
-    // the chunks: the coarse levels of the whole prototype then share pages in one
-    // breadth-first order, as if it had been built in one piece. A crown holds at least the
-    // chunk's root and at most a page of records (a chunk's own pages then start at a level
-    // that fills pages), in up to half its share of the memory; its triangles take the rest
-    // of that share, and those that do not fit stay in the chunk.
+    // grows with the number of chunks, that is with the scene (docs/results/paging.md). So the
+    // chunks are laid out level by level across all of them (LevelRegions), and each chunk's
+    // top levels, its crown, wait in memory and are laid out with the cells above the chunks:
+    // the whole prototype then shares pages level by level, as if it had been built in one
+    // piece. A crown holds at least the chunk's root and at most a page of records, in up to
+    // half its share of the memory; its triangles take the rest of that share, and those that
+    // do not fit stay in the chunk's levels.
     const std::uint64_t crownShare = mCrownBytes / std::max<std::size_t>(chunkNodes.size(), 1);
     CrownBudget crownBudget;
     crownBudget.nodes = std::clamp<std::uint64_t>(crownShare / 2 / sizeof(BuildNode), 1, storage::nodesPerPage(mWriter.pageSize()));
@@ -302,6 +325,7 @@ Result<PrototypeBuildResult> PrototypeBuilder::buildChunked(
             : 0;
     PrototypeBuildResult result;
     result.chunks = chunkNodes.size();
+    LevelRegions levels(mTempDirectory, "proto" + std::to_string(prototypeId), mWriter.pageSize());
     std::vector<ChunkOutput> finished(chunkNodes.size());
     for (std::size_t begin = 0; begin < chunkNodes.size(); begin += mThreads) {
         const std::size_t end = std::min<std::size_t>(begin + mThreads, chunkNodes.size());
@@ -313,20 +337,17 @@ Result<PrototypeBuildResult> PrototypeBuilder::buildChunked(
             const int level = node.level;
             const int octant = node.octant;
             const HierarchyParams params = mParams;
-            const std::uint32_t pageSize = mWriter.pageSize();
-            running.push_back(std::async(std::launch::async, [file, cell, level, octant, crownBudget, params, pageSize]() -> Result<ChunkOutput> {
+            running.push_back(std::async(std::launch::async, [file, cell, level, octant, crownBudget, params]() -> Result<ChunkOutput> {
                 FF_ASSIGN_OR_RETURN(std::vector<storage::PackedTriangle> chunkTriangles, file->readAll());
                 file->remove();
-                return buildChunk(std::move(chunkTriangles), cell, level, octant, crownBudget, params, pageSize);
+                return buildChunk(std::move(chunkTriangles), cell, level, octant, crownBudget, params);
             }));
         }
         for (std::size_t c = begin; c < end; ++c) {
             Result<ChunkOutput> chunk = running[c - begin].get();
             if (!chunk)
                 return chunk.status();
-            result.geometryPages += chunk->encoded.geometryPageCount(mWriter.pageSize());
-            result.nodePages += chunk->encoded.nodePages.size();
-            FF_RETURN_IF_ERROR(commitSubtree(mWriter, chunk->encoded));
+            FF_RETURN_IF_ERROR(levels.append(chunk->encoded));
             result.nodes += chunk->nodes;
             result.maxDepth = std::max(result.maxDepth, chunk->maxDepth);
             for (std::size_t l = 0; l < chunk->summary.cuts.size(); ++l) {
@@ -337,6 +358,10 @@ Result<PrototypeBuildResult> PrototypeBuilder::buildChunked(
             finished[c] = std::move(chunk.value());
         }
     }
+    result.geometryPages += levels.geometryPages();
+    result.nodePages += levels.nodePages();
+    FF_RETURN_IF_ERROR(levels.writeTo(mWriter));
+    spillBytes += levels.spillBytes();
 
     // ---- the top tree: cells above the chunks, composited from them --------------------------
     std::vector<BuildNode> nodes(top.size());
@@ -397,14 +422,18 @@ Result<PrototypeBuildResult> PrototypeBuilder::buildChunked(
     for (std::size_t i = 0; i < top.size(); ++i) {
         if (top[i].chunk < 0)
             continue;
-        EncodedSubtree& chunk = finished[static_cast<std::size_t>(top[i].chunk)].encoded;
+        LevelledSubtree& chunk = finished[static_cast<std::size_t>(top[i].chunk)].encoded;
         const std::size_t base = nodes.size() - 1; // crown position k > 0 lands at base + k
         const std::uint64_t triangleBase = ownTriangles.size();
         for (std::size_t k = 0; k < chunk.crown.size(); ++k) {
             BuildNode node = std::move(chunk.crown[k]);
-            if (node.childCount > 0 && !node.placedChildren)
+            if (node.placedChildren)
+                node.placedChildren = levels.absoluteChildren(node.level + 1u, *node.placedChildren);
+            else if (node.childCount > 0)
                 node.firstChild = static_cast<std::uint32_t>(base + node.firstChild);
-            if (!node.placedTriangles)
+            if (node.placedTriangles)
+                node.placedTriangles = levels.absoluteTriangles(node.level, *node.placedTriangles);
+            else
                 node.firstTriangle += triangleBase;
             if (k == 0)
                 nodes[i] = std::move(node);
@@ -416,12 +445,12 @@ Result<PrototypeBuildResult> PrototypeBuilder::buildChunked(
         chunk.crown = std::vector<BuildNode>();
         chunk.crownTriangles = std::vector<storage::PackedTriangle>();
     }
-    EncodedSubtree encoded = encodeSubtree(std::move(nodes), std::move(ownTriangles), mWriter.pageSize(), CrownBudget{});
+    EncodedSubtree encoded = encodeSubtree(std::move(nodes), std::move(ownTriangles), mWriter.pageSize());
     result.geometryPages += encoded.geometryPageCount(mWriter.pageSize());
     result.nodePages += encoded.nodePages.size();
     result.nodes += encoded.nodeCount - crownNodes; // crowns were counted with their chunks
     FF_RETURN_IF_ERROR(commitSubtree(mWriter, encoded));
-    result.record.root = *encoded.rootRef;
+    result.record.root = encoded.rootRef;
     result.record.boundsMin = {boundsMin.x, boundsMin.y, boundsMin.z};
     result.record.boundsMax = {boundsMax.x, boundsMax.y, boundsMax.z};
     result.record.nodeCount = result.nodes;

@@ -47,9 +47,10 @@ inline constexpr std::uint64_t kChunkBytesPerTriangle = 160;
 
 /**
  * Builds one prototype's octree from its run file and appends its pages to `writer`. A
- * prototype larger than one chunk (chunkTriangles) is partitioned out of core first. Each
- * chunk's top levels (its crown, at most a page of records and crownBytes across all chunks)
- * are held back and written with the cells above the chunks, in one breadth-first order.
+ * prototype larger than one chunk (chunkTriangles) is partitioned out of core first, and its
+ * chunks are laid out level by level across all of them (LevelRegions). Each chunk's top
+ * levels (its crown, at most a page of records and crownBytes across all chunks) are held back
+ * and written with the cells above the chunks, in one breadth-first order.
  */
 class PrototypeBuilder {
 public:

@@ -50,11 +50,14 @@ Status ioStatus(int error, const std::string& what, const std::filesystem::path&
     return {code, what + " " + path.string() + ": " + std::strerror(error)};
 }
 
-RunFile::RunFile(std::filesystem::path path) : mPath(std::move(path)) {}
+template <class Item>
+SpillFile<Item>::SpillFile(std::filesystem::path path) : mPath(std::move(path)) {}
 
-RunFile::~RunFile() { remove(); }
+template <class Item>
+SpillFile<Item>::~SpillFile() { remove(); }
 
-RunFile::RunFile(RunFile&& other) noexcept
+template <class Item>
+SpillFile<Item>::SpillFile(SpillFile&& other) noexcept
     : mPath(std::move(other.mPath))
     , mBuffer(std::move(other.mBuffer))
     , mBufferLimitBytes(other.mBufferLimitBytes)
@@ -65,53 +68,63 @@ RunFile::RunFile(RunFile&& other) noexcept
     other.mPath.clear();
 }
 
-Status RunFile::append(std::span<const storage::PackedTriangle> triangles) {
-    mBuffer.insert(mBuffer.end(), triangles.begin(), triangles.end());
-    mCount += triangles.size();
-    if (bufferedBytes() >= mBufferLimitBytes)
-        return flush();
-    return Status::ok();
+template <class Item>
+Status SpillFile<Item>::append(std::span<const Item> items) {
+    mCount += items.size();
+    if (bufferedBytes() + items.size_bytes() < mBufferLimitBytes) {
+        mBuffer.insert(mBuffer.end(), items.begin(), items.end());
+        return Status::ok();
+    }
+    return writeOut(items); // straight from the caller's memory: no copy of a large append
 }
 
-Status RunFile::flush() {
+template <class Item>
+Status SpillFile<Item>::flush() {
     if (mBuffer.empty() && mCreated)
         return Status::ok();
+    return writeOut({});
+}
+
+template <class Item>
+Status SpillFile<Item>::writeOut(std::span<const Item> more) {
     const int flags = O_WRONLY | O_CREAT | O_CLOEXEC | (mCreated ? O_APPEND : O_TRUNC);
     FileDescriptor fd(::open(mPath.c_str(), flags, 0600));
     if (fd.get() < 0)
-        return ioStatus(errno, "cannot open run file", mPath);
+        return ioStatus(errno, "cannot open spill file", mPath);
     mCreated = true;
-    const auto bytes = std::as_bytes(std::span(mBuffer));
-    FF_RETURN_IF_ERROR(writeAll(fd.get(), bytes.data(), bytes.size(), mPath));
+    for (const auto bytes : {std::as_bytes(std::span(mBuffer)), std::as_bytes(more)}) {
+        FF_RETURN_IF_ERROR(writeAll(fd.get(), bytes.data(), bytes.size(), mPath));
+        mBytesWritten += bytes.size();
+    }
     if (::close(fd.release()) != 0)
         return ioStatus(errno, "cannot close", mPath);
-    mBytesWritten += bytes.size();
     mBuffer.clear();
-    mBuffer.shrink_to_fit(); // idle run files should not pin their peak buffer
+    mBuffer.shrink_to_fit(); // idle spill files should not pin their peak buffer
     return Status::ok();
 }
 
-Status RunFile::forEachBatch(
+template <class Item>
+Status SpillFile<Item>::forEachBatch(
         std::size_t batchSize,
-        const std::function<Status(std::span<const storage::PackedTriangle>)>& visit) {
+        const std::function<Status(std::span<const Item>)>& visit) {
     FF_RETURN_IF_ERROR(flush());
     FileDescriptor fd(::open(mPath.c_str(), O_RDONLY | O_CLOEXEC));
     if (fd.get() < 0)
-        return ioStatus(errno, "cannot open run file", mPath);
-    std::vector<storage::PackedTriangle> batch(std::max<std::size_t>(batchSize, 1));
+        return ioStatus(errno, "cannot open spill file", mPath);
+    std::vector<Item> batch(std::max<std::size_t>(batchSize, 1));
     std::uint64_t remaining = mCount;
     while (remaining > 0) {
         const std::size_t want = static_cast<std::size_t>(std::min<std::uint64_t>(remaining, batch.size()));
         auto* out = reinterpret_cast<char*>(batch.data());
-        std::size_t bytes = want * sizeof(storage::PackedTriangle);
+        std::size_t bytes = want * sizeof(Item);
         while (bytes > 0) {
             const ssize_t n = ::read(fd.get(), out, bytes);
             if (n < 0 && errno == EINTR)
                 continue;
             if (n < 0)
-                return ioStatus(errno, "cannot read run file", mPath);
+                return ioStatus(errno, "cannot read spill file", mPath);
             if (n == 0)
-                return Status(ErrorCode::IoError, "run file " + mPath.string() + " is shorter than written");
+                return Status(ErrorCode::IoError, "spill file " + mPath.string() + " is shorter than written");
             out += n;
             bytes -= static_cast<std::size_t>(n);
         }
@@ -121,17 +134,19 @@ Status RunFile::forEachBatch(
     return Status::ok();
 }
 
-Result<std::vector<storage::PackedTriangle>> RunFile::readAll() {
-    std::vector<storage::PackedTriangle> all;
+template <class Item>
+Result<std::vector<Item>> SpillFile<Item>::readAll() {
+    std::vector<Item> all;
     all.reserve(static_cast<std::size_t>(mCount));
-    FF_RETURN_IF_ERROR(forEachBatch(1u << 16, [&all](std::span<const storage::PackedTriangle> batch) {
+    FF_RETURN_IF_ERROR(forEachBatch(1u << 16, [&all](std::span<const Item> batch) {
         all.insert(all.end(), batch.begin(), batch.end());
         return Status::ok();
     }));
     return all;
 }
 
-void RunFile::remove() noexcept {
+template <class Item>
+void SpillFile<Item>::remove() noexcept {
     if (mCreated && !mPath.empty())
         ::unlink(mPath.c_str());
     mCreated = false;
@@ -139,5 +154,8 @@ void RunFile::remove() noexcept {
     mBuffer.shrink_to_fit();
     mCount = 0;
 }
+
+template class SpillFile<storage::PackedTriangle>;
+template class SpillFile<storage::NodeRecord>;
 
 } // namespace ff::builder

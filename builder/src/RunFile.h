@@ -12,50 +12,60 @@
 namespace ff::builder {
 
 /**
- * An append-only temporary file of PackedTriangles with its own write buffer: how the builder
- * keeps triangle streams out of memory. Reading is sequential, in batches. The file is removed
- * when the RunFile dies. Not thread-safe.
+ * An append-only temporary file of fixed-size records (triangles, node records) with its own
+ * write buffer: how the builder keeps streams out of memory. Reading is sequential, in batches.
+ * The file is removed when the SpillFile dies. Not thread-safe.
  */
-class RunFile {
+template <class Item>
+class SpillFile {
 public:
-    explicit RunFile(std::filesystem::path path);
-    ~RunFile();
-    RunFile(RunFile&& other) noexcept;
-    RunFile& operator=(RunFile&&) = delete;
-    RunFile(const RunFile&) = delete;
-    RunFile& operator=(const RunFile&) = delete;
+    explicit SpillFile(std::filesystem::path path);
+    ~SpillFile();
+    SpillFile(SpillFile&& other) noexcept;
+    SpillFile& operator=(SpillFile&&) = delete;
+    SpillFile(const SpillFile&) = delete;
+    SpillFile& operator=(const SpillFile&) = delete;
 
-    /** Buffers `triangles`; writes through once the buffer holds `bufferLimitBytes`. */
-    [[nodiscard]] Status append(std::span<const storage::PackedTriangle> triangles);
+    /** Buffers `items`; writes the buffer and `items` through once they reach
+     *  `bufferLimitBytes` (0: every append writes through). */
+    [[nodiscard]] Status append(std::span<const Item> items);
     /** Writes the buffer out (opening/closing the file, so many RunFiles cost no descriptors). */
     [[nodiscard]] Status flush();
 
     std::uint64_t count() const noexcept { return mCount; }
-    std::size_t bufferedBytes() const noexcept { return mBuffer.size() * sizeof(storage::PackedTriangle); }
+    std::size_t bufferedBytes() const noexcept { return mBuffer.size() * sizeof(Item); }
     std::uint64_t bytesWritten() const noexcept { return mBytesWritten; }
     const std::filesystem::path& path() const noexcept { return mPath; }
 
     void setBufferLimit(std::size_t bytes) noexcept { mBufferLimitBytes = bytes; }
 
-    /** Flushes, then calls visit() on consecutive batches of at most batchSize triangles. */
+    /** Flushes, then calls visit() on consecutive batches of at most batchSize items. */
     [[nodiscard]] Status forEachBatch(
             std::size_t batchSize,
-            const std::function<Status(std::span<const storage::PackedTriangle>)>& visit);
+            const std::function<Status(std::span<const Item>)>& visit);
 
     /** Flushes, then reads the whole file. */
-    [[nodiscard]] Result<std::vector<storage::PackedTriangle>> readAll();
+    [[nodiscard]] Result<std::vector<Item>> readAll();
 
     /** Deletes the file and forgets its contents. */
     void remove() noexcept;
 
 private:
+    /** Writes the buffer, then `more`, and empties the buffer. */
+    [[nodiscard]] Status writeOut(std::span<const Item> more);
+
     std::filesystem::path mPath;
-    std::vector<storage::PackedTriangle> mBuffer;
+    std::vector<Item> mBuffer;
     std::size_t mBufferLimitBytes = 1u << 20;
     std::uint64_t mCount = 0;
     std::uint64_t mBytesWritten = 0;
     bool mCreated = false;
 };
+
+/** Triangles on their way to a chunk or a level region (RunFile.cpp instantiates these two). */
+using RunFile = SpillFile<storage::PackedTriangle>;
+/** Node records on their way to a level region. */
+using RecordFile = SpillFile<storage::NodeRecord>;
 
 /** ENOSPC/EDQUOT become DiskFull, anything else IoError; the message names the path. */
 Status ioStatus(int error, const std::string& what, const std::filesystem::path& path);

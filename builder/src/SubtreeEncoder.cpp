@@ -76,6 +76,131 @@ bool orderGeometryBreadthFirst(
     return true;
 }
 
+/** The subtree in breadth-first order, each node once; levelEnd[d] is where depth d ends in it. */
+struct BreadthFirst {
+    std::vector<std::uint32_t> order; ///< node indices
+    std::vector<std::size_t> levelEnd;
+};
+
+BreadthFirst breadthFirst(const std::vector<BuildNode>& nodes) {
+    BreadthFirst out;
+    out.order.reserve(nodes.size());
+    out.order.push_back(0);
+    for (std::size_t begin = 0; begin < out.order.size();) {
+        const std::size_t end = out.order.size();
+        for (std::size_t i = begin; i < end; ++i) {
+            const BuildNode& node = nodes[out.order[i]];
+            if (node.placedChildren)
+                continue;
+            for (std::uint32_t c = 0; c < node.childCount; ++c)
+                out.order.push_back(node.firstChild + c);
+        }
+        out.levelEnd.push_back(end);
+        begin = end;
+    }
+    return out;
+}
+
+/** The crown: the first `size` nodes of the breadth-first order; its lowest level starts at
+ *  position `lowest` (depth `lowestDepth`). The children of that level and of every level below
+ *  are placed. */
+struct CrownExtent {
+    std::size_t size = 0;
+    std::size_t lowest = 0;
+    std::size_t lowestDepth = 0;
+};
+
+/** The root and the whole levels below it that fit the budget. */
+CrownExtent chooseCrown(const BreadthFirst& bf, CrownBudget budget) {
+    CrownExtent crown;
+    for (std::size_t d = 0; d < bf.levelEnd.size(); ++d) {
+        if (d > 0 && bf.levelEnd[d] > budget.nodes)
+            break;
+        crown.lowest = d == 0 ? 0 : bf.levelEnd[d - 1];
+        crown.lowestDepth = d;
+        crown.size = bf.levelEnd[d];
+    }
+    return crown;
+}
+
+/**
+ * Crown nodes come first in breadth-first order, and so do their triangles (ordered): those
+ * that fit the budget move to `crownTriangles` in the same order, the others close up at the
+ * front and stay with the subtree. Afterwards a crown node's firstTriangle indexes whichever
+ * vector holds its triangles, and every other node's is `moved` too high.
+ */
+struct CrownTriangleSplit {
+    std::vector<bool> keptInSubtree; ///< per crown position
+    std::uint64_t moved = 0;
+};
+
+CrownTriangleSplit splitCrownTriangles(
+        std::vector<BuildNode>& nodes,
+        const BreadthFirst& bf,
+        const CrownExtent& crown,
+        std::uint64_t budgetTriangles,
+        std::vector<storage::PackedTriangle>& triangles,
+        std::vector<storage::PackedTriangle>& crownTriangles) {
+    CrownTriangleSplit split;
+    split.keptInSubtree.assign(crown.size, false);
+    std::uint64_t crownSpan = 0;
+    std::uint64_t kept = 0;
+    for (std::size_t i = 0; i < crown.size; ++i) {
+        BuildNode& node = nodes[bf.order[i]];
+        crownSpan += node.triangleCount;
+        if (node.triangleCount == 0)
+            continue;
+        const auto first = triangles.begin() + static_cast<std::ptrdiff_t>(node.firstTriangle);
+        const auto last = first + static_cast<std::ptrdiff_t>(node.triangleCount);
+        if (crownTriangles.size() + node.triangleCount <= budgetTriangles) {
+            node.firstTriangle = crownTriangles.size();
+            crownTriangles.insert(crownTriangles.end(), first, last);
+        } else {
+            if (kept != node.firstTriangle) // kept < firstTriangle: a move to the front
+                std::move(first, last, triangles.begin() + static_cast<std::ptrdiff_t>(kept));
+            node.firstTriangle = kept;
+            kept += node.triangleCount;
+            split.keptInSubtree[i] = true;
+        }
+    }
+    split.moved = crownSpan - kept;
+    triangles.erase(triangles.begin() + static_cast<std::ptrdiff_t>(kept), triangles.begin() + static_cast<std::ptrdiff_t>(crownSpan));
+    return split;
+}
+
+/**
+ * The crown, renumbered in breadth-first order: children follow in the order their parents
+ * come, so a cursor over the positions after the root hands out each first child. The lowest
+ * level's children get childRef(firstChild), the triangles kept in the subtree
+ * triangleRef(position, node).
+ */
+template <class ChildRef, class TriangleRef>
+std::vector<BuildNode> takeCrown(
+        const std::vector<BuildNode>& nodes,
+        const BreadthFirst& bf,
+        const CrownExtent& crown,
+        const CrownTriangleSplit& split,
+        ChildRef childRef,
+        TriangleRef triangleRef) {
+    std::vector<BuildNode> out;
+    out.reserve(crown.size);
+    std::size_t nextPosition = 1;
+    for (std::size_t i = 0; i < crown.size; ++i) {
+        BuildNode node = nodes[bf.order[i]];
+        FF_ASSERT(!node.placedChildren && !node.placedTriangles); // only the tree above the crowns has those
+        if (split.keptInSubtree[i])
+            node.placedTriangles = triangleRef(i, node);
+        if (node.childCount > 0 && i >= crown.lowest) {
+            node.placedChildren = childRef(node.firstChild);
+        } else if (node.childCount > 0) {
+            node.firstChild = static_cast<std::uint32_t>(nextPosition);
+            nextPosition += node.childCount;
+        }
+        out.push_back(std::move(node));
+    }
+    return out;
+}
+
 } // namespace
 
 std::uint64_t EncodedSubtree::geometryPageCount(std::uint32_t pageSize) const {
@@ -86,41 +211,11 @@ std::uint64_t EncodedSubtree::geometryPageCount(std::uint32_t pageSize) const {
 EncodedSubtree encodeSubtree(
         std::vector<BuildNode> nodes,
         std::vector<storage::PackedTriangle> triangles,
-        std::uint32_t pageSize,
-        CrownBudget crownBudget) {
+        std::uint32_t pageSize) {
     FF_ASSERT(!nodes.empty());
     const std::uint32_t perPage = storage::nodesPerPage(pageSize);
     const std::uint32_t trianglesPerPage = storage::trianglesPerPage(pageSize);
-
-    // Breadth-first order of the whole subtree, each node once; levelEnd[d] is where level d
-    // ends in it.
-    std::vector<std::uint32_t> order; // node indices
-    order.reserve(nodes.size());
-    order.push_back(0);
-    std::vector<std::size_t> levelEnd;
-    for (std::size_t begin = 0; begin < order.size();) {
-        const std::size_t end = order.size();
-        for (std::size_t i = begin; i < end; ++i) {
-            const BuildNode& node = nodes[order[i]];
-            if (node.placedChildren)
-                continue;
-            for (std::uint32_t c = 0; c < node.childCount; ++c)
-                order.push_back(node.firstChild + c);
-        }
-        levelEnd.push_back(end);
-        begin = end;
-    }
-    // The crown: the root and the whole levels below it that fit the budget. Its lowest level
-    // starts at crownLowest in `order`; the children of that level and of every level below
-    // are placed here.
-    std::size_t crownSize = 0;
-    std::size_t crownLowest = 0;
-    for (std::size_t d = 0; d < levelEnd.size() && crownBudget.nodes > 0; ++d) {
-        if (d > 0 && levelEnd[d] > crownBudget.nodes)
-            break;
-        crownLowest = d == 0 ? 0 : levelEnd[d - 1];
-        crownSize = levelEnd[d];
-    }
+    const BreadthFirst bf = breadthFirst(nodes);
 
     // Pages fill with whole sibling blocks in breadth-first order: level by level, and within a
     // level in octant (Morton) order, so a page holds one level of one neighbourhood. A frame's
@@ -145,49 +240,14 @@ EncodedSubtree encodeSubtree(
             page.push_back(first + i);
         }
     };
-    if (crownSize == 0)
-        placeBlock(0, 1);
-    for (std::size_t i = crownLowest; i < order.size(); ++i) {
-        const BuildNode& node = nodes[order[i]];
+    placeBlock(0, 1);
+    for (const std::uint32_t n : bf.order) {
+        const BuildNode& node = nodes[n];
         if (node.childCount > 0 && !node.placedChildren)
             placeBlock(node.firstChild, node.childCount);
     }
 
-    EncodedSubtree out;
-    const bool ordered = orderGeometryBreadthFirst(nodes, order, triangles);
-    // Crown nodes come first in breadth-first order, and so do their triangles: the first
-    // `crownSpan`. Those that fit the budget move to crownTriangles, in the same order; the
-    // others close up at the front and stay with the subtree (placedTriangles).
-    std::uint64_t crownSpan = 0;
-    for (std::size_t i = 0; i < crownSize; ++i)
-        crownSpan += nodes[order[i]].triangleCount;
-    FF_ASSERT(ordered || crownSpan == 0); // a crown comes from a chunk, far below 2^32 triangles
-    std::uint64_t kept = 0;
-    std::vector<bool> keptInSubtree(crownSize, false);
-    for (std::size_t i = 0; i < crownSize; ++i) {
-        BuildNode& node = nodes[order[i]];
-        if (node.triangleCount == 0)
-            continue;
-        const auto first = triangles.begin() + static_cast<std::ptrdiff_t>(node.firstTriangle);
-        const auto last = first + static_cast<std::ptrdiff_t>(node.triangleCount);
-        if (out.crownTriangles.size() + node.triangleCount <= crownBudget.triangles) {
-            node.firstTriangle = out.crownTriangles.size();
-            out.crownTriangles.insert(out.crownTriangles.end(), first, last);
-        } else {
-            if (kept != node.firstTriangle) // kept < firstTriangle: a move to the front
-                std::move(first, last, triangles.begin() + static_cast<std::ptrdiff_t>(kept));
-            node.firstTriangle = kept;
-            kept += node.triangleCount;
-            keptInSubtree[i] = true;
-        }
-    }
-    const std::uint64_t moved = crownSpan - kept;
-    triangles.erase(triangles.begin() + static_cast<std::ptrdiff_t>(kept), triangles.begin() + static_cast<std::ptrdiff_t>(crownSpan));
-    auto runStart = [&](std::uint64_t firstTriangle) {
-        return TriangleSlot{static_cast<std::uint32_t>(firstTriangle / trianglesPerPage),
-                            static_cast<std::uint32_t>(firstTriangle % trianglesPerPage)};
-    };
-
+    orderGeometryBreadthFirst(nodes, bf.order, triangles);
     auto recordOf = [&](std::uint32_t n) {
         const BuildNode& node = nodes[n];
         storage::NodeRecord r = toRecord(node);
@@ -196,13 +256,17 @@ EncodedSubtree encodeSubtree(
         else if (node.childCount > 0)
             r.firstChild = {placement[node.firstChild].page, placement[node.firstChild].slot};
         if (node.triangleCount > 0 && node.kind == static_cast<std::uint8_t>(storage::NodeKind::Cell)) {
-            const TriangleSlot start = node.placedTriangles ? *node.placedTriangles : runStart(node.firstTriangle - moved);
+            const TriangleSlot start = node.placedTriangles
+                    ? *node.placedTriangles
+                    : TriangleSlot{static_cast<std::uint32_t>(node.firstTriangle / trianglesPerPage),
+                                   static_cast<std::uint32_t>(node.firstTriangle % trianglesPerPage)};
             r.geometryPage = start.page;
             r.geometryFirst = start.slot;
             r.geometryCount = static_cast<std::uint32_t>(node.triangleCount);
         }
         return r;
     };
+    EncodedSubtree out;
     out.nodePages.resize(pages.size());
     for (std::size_t p = 0; p < pages.size(); ++p) {
         for (std::uint32_t n : pages[p]) {
@@ -212,26 +276,88 @@ EncodedSubtree encodeSubtree(
     }
     for (const BuildNode& node : nodes)
         out.maxLevel = std::max<std::uint32_t>(out.maxLevel, node.level);
+    out.triangles = std::move(triangles);
+    return out;
+}
 
-    // The crown, renumbered in breadth-first order: children follow in the order their parents
-    // come, so a cursor over the positions after the root hands out each first child.
-    out.crown.reserve(crownSize);
-    std::size_t nextPosition = 1;
-    for (std::size_t i = 0; i < crownSize; ++i) {
-        BuildNode node = nodes[order[i]];
-        FF_ASSERT(!node.placedChildren && !node.placedTriangles); // only the tree above the crowns has those
-        if (keptInSubtree[i])
-            node.placedTriangles = runStart(node.firstTriangle);
-        if (node.childCount > 0 && i >= crownLowest) {
-            node.placedChildren = storage::NodeRef{placement[node.firstChild].page, placement[node.firstChild].slot};
-        } else if (node.childCount > 0) {
-            node.firstChild = static_cast<std::uint32_t>(nextPosition);
-            nextPosition += node.childCount;
+LevelledSubtree encodeLevels(
+        std::vector<BuildNode> nodes,
+        std::vector<storage::PackedTriangle> triangles,
+        CrownBudget crownBudget) {
+    FF_ASSERT(!nodes.empty() && crownBudget.nodes > 0);
+    const BreadthFirst bf = breadthFirst(nodes);
+    const CrownExtent crown = chooseCrown(bf, crownBudget);
+    const bool ordered = orderGeometryBreadthFirst(nodes, bf.order, triangles);
+    FF_ASSERT(ordered); // PrototypeBuilder keeps chunks below 2^32 triangles
+
+    LevelledSubtree out;
+    const CrownTriangleSplit split = splitCrownTriangles(nodes, bf, crown, crownBudget.triangles, triangles, out.crownTriangles);
+    const std::size_t depths = bf.levelEnd.size();
+    out.rootLevel = nodes[0].level;
+    out.levels.resize(depths);
+
+    // Where each node sits in the order, and where its triangles now start (crown nodes that
+    // kept theirs were renumbered by the split, the others are `moved` too high).
+    std::vector<std::uint32_t> position(nodes.size());
+    std::vector<std::size_t> depthOf(bf.order.size());
+    for (std::size_t d = 0, i = 0; d < depths; ++d)
+        for (; i < bf.levelEnd[d]; ++i) {
+            position[bf.order[i]] = static_cast<std::uint32_t>(i);
+            depthOf[i] = d;
         }
-        out.crown.push_back(std::move(node));
+    auto subtreeTriangle = [&](std::size_t i, const BuildNode& node) {
+        return i < crown.size ? node.firstTriangle : node.firstTriangle - split.moved;
+    };
+    // The triangles stay in breadth-first order, hence level by level: each level's share is a
+    // range of `triangles`, and a node's local offset is where its run starts in that range.
+    std::vector<std::uint64_t> levelTriangles(depths + 1, 0);
+    for (std::size_t i = 0; i < bf.order.size(); ++i) {
+        const bool moved = i < crown.size && !split.keptInSubtree[i];
+        if (!moved)
+            levelTriangles[depthOf[i] + 1] += nodes[bf.order[i]].triangleCount;
     }
-    if (crownSize == 0)
-        out.rootRef = storage::NodeRef{0, 0};
+    for (std::size_t d = 0; d < depths; ++d) {
+        levelTriangles[d + 1] += levelTriangles[d];
+        out.levels[d].triangleBegin = levelTriangles[d];
+        out.levels[d].triangleCount = levelTriangles[d + 1] - levelTriangles[d];
+    }
+    auto localTriangle = [&](std::size_t i, const BuildNode& node) {
+        return subtreeTriangle(i, node) - levelTriangles[depthOf[i]];
+    };
+
+    // Sibling blocks in breadth-first order: the crown's lowest level has the first blocks
+    // below the crown, every placed node those of the levels under it.
+    for (std::size_t i = crown.lowest; i < crown.size; ++i) {
+        const BuildNode& node = nodes[bf.order[i]];
+        if (node.childCount > 0)
+            out.levels[crown.lowestDepth + 1].blocks.push_back(static_cast<std::uint8_t>(node.childCount));
+    }
+    for (std::size_t i = crown.size; i < bf.order.size(); ++i) {
+        const BuildNode& node = nodes[bf.order[i]];
+        const std::size_t d = depthOf[i];
+        storage::NodeRecord r = toRecord(node);
+        if (node.childCount > 0) {
+            r.firstChild = {0, position[node.firstChild] - static_cast<std::uint32_t>(bf.levelEnd[d])};
+            out.levels[d + 1].blocks.push_back(static_cast<std::uint8_t>(node.childCount));
+        }
+        if (node.triangleCount > 0) {
+            r.geometryFirst = static_cast<std::uint32_t>(localTriangle(i, node));
+            r.geometryCount = static_cast<std::uint32_t>(node.triangleCount);
+        }
+        out.levels[d].records.push_back(r);
+        ++out.nodeCount;
+    }
+    for (const BuildNode& node : nodes)
+        out.maxLevel = std::max<std::uint32_t>(out.maxLevel, node.level);
+
+    out.crown = takeCrown(
+            nodes, bf, crown, split,
+            [&](std::uint32_t firstChild) {
+                return storage::NodeRef{0, position[firstChild] - static_cast<std::uint32_t>(bf.levelEnd[crown.lowestDepth])};
+            },
+            [&](std::size_t i, const BuildNode& node) {
+                return TriangleSlot{0, static_cast<std::uint32_t>(localTriangle(i, node))};
+            });
     out.triangles = std::move(triangles);
     return out;
 }
@@ -261,14 +387,7 @@ Status commitSubtree(storage::SceneWriter& writer, EncodedSubtree& subtree) {
         }
         FF_RETURN_IF_ERROR(writer.appendPage(storage::PageType::Nodes, buffer).status());
     }
-    for (BuildNode& node : subtree.crown) {
-        if (node.placedChildren)
-            node.placedChildren->page += static_cast<std::uint32_t>(nodeBase);
-        if (node.placedTriangles)
-            node.placedTriangles->page += static_cast<std::uint32_t>(geometryBase);
-    }
-    if (subtree.rootRef)
-        subtree.rootRef->page += static_cast<std::uint32_t>(nodeBase);
+    subtree.rootRef.page += static_cast<std::uint32_t>(nodeBase);
     // Free the memory, not just the elements: `= {}` picks operator=(initializer_list), which
     // keeps the capacity, and every committed chunk would stay resident until the build ends.
     subtree.triangles = std::vector<storage::PackedTriangle>();

@@ -14,15 +14,9 @@ namespace ff::builder {
 
 /**
  * A subtree ready to be written: geometry pages first, then node pages. Page numbers inside
- * (NodeRecord::firstChild.page, geometryPage of Cell nodes, the crown's placedChildren and
- * placedTriangles) are relative to the subtree's first page until commitSubtree() relocates
- * them.
- *
- * The crown is the subtree's top levels, held back for the tree above (a chunk's crown is laid
- * out with the cells above the chunks): crown[0] is the root, children are contiguous, a crown
- * node either has its children in the crown (firstChild) or already placed (placedChildren),
- * and its triangles either in crownTriangles (firstTriangle) or, past the crown's triangle
- * budget, in the subtree's own geometry (placedTriangles).
+ * (NodeRecord::firstChild.page, geometryPage of Cell nodes, rootRef) are relative to the
+ * subtree's first page until commitSubtree() relocates them; those of nodes that came with
+ * placedChildren or placedTriangles are final already.
  */
 struct EncodedSubtree {
     std::vector<storage::PackedTriangle> triangles; ///< paged trianglesPerPage at a time
@@ -32,35 +26,72 @@ struct EncodedSubtree {
         bool trianglesPlacedElsewhere = false; ///< geometryPage is final: never relocated
     };
     std::vector<std::vector<Slot>> nodePages;
-    std::optional<storage::NodeRef> rootRef; ///< where the root sits, if it was placed
-    std::vector<BuildNode> crown;
-    std::vector<storage::PackedTriangle> crownTriangles;
-    std::uint64_t nodeCount = 0; ///< records in nodePages
-    std::uint32_t maxLevel = 0;  ///< deepest level, crown included
+    storage::NodeRef rootRef{0, 0}; ///< where the root sits
+    std::uint64_t nodeCount = 0;    ///< records in nodePages
+    std::uint32_t maxLevel = 0;     ///< deepest level
 
     std::uint64_t geometryPageCount(std::uint32_t pageSize) const;
 };
 
-/** How much of a subtree may be held back as its crown; 0 nodes: no crown. */
+/**
+ * Lays `nodes` (nodes[0] = root, children contiguous) out in pages: whole sibling blocks in
+ * breadth-first order of the subtree (level by level, octant order within a level), so the
+ * pages a cut needs are the levels above it, the root first. The nodes' triangles are
+ * reordered into the same breadth-first order, for the same reason. Nodes with placedChildren
+ * or placedTriangles keep those (the tree above a prototype's chunks). Takes ownership of the
+ * triangles.
+ */
+EncodedSubtree encodeSubtree(
+        std::vector<BuildNode> nodes,
+        std::vector<storage::PackedTriangle> triangles,
+        std::uint32_t pageSize);
+
+/**
+ * How much of a chunk may be held back as its crown, the top levels laid out with the tree
+ * above the chunks: at most `nodes` records (whole levels, the root always) and `triangles`
+ * of their triangles.
+ */
 struct CrownBudget {
     std::uint64_t nodes = 0;
     std::uint64_t triangles = 0;
 };
 
 /**
- * Lays `nodes` (nodes[0] = root, children contiguous) out in pages: whole sibling blocks in
- * breadth-first order of the subtree (level by level, octant order within a level), so the
- * pages a cut needs are the levels above it. The nodes' triangles are reordered into the same
- * breadth-first order, for the same reason. With a crown budget of 0 nodes everything is
- * placed, the root first; otherwise the root and as many whole levels below it as fit the
- * budget's nodes form the crown and are not placed, and the crown's triangles, in
- * breadth-first order, move with it while they fit the budget's triangles. Nodes with
- * placedChildren or placedTriangles keep those. Takes ownership of the triangles.
+ * A chunk below its crown, level by level and not yet placed, for a layout that puts each level
+ * of many chunks together (LevelRegions). References are local until LevelRegions places the
+ * chunk: a record's firstChild is {0, index of the first child in the next level's records}, a
+ * Cell record's geometry is {geometryPage 0, geometryFirst = where its run starts in its level's
+ * triangles}; a crown node's placedChildren and placedTriangles follow the same rule.
  */
-EncodedSubtree encodeSubtree(
+struct LevelledSubtree {
+    struct Level {
+        std::vector<storage::NodeRecord> records; ///< the level's sibling blocks, in order
+        std::vector<std::uint8_t> blocks;         ///< their sizes, in order
+        std::uint64_t triangleBegin = 0;          ///< the level's range of `triangles`
+        std::uint64_t triangleCount = 0;
+    };
+    std::uint32_t rootLevel = 0;                         ///< octree level of levels[0]
+    std::vector<Level> levels;                           ///< levels[d]: level rootLevel + d
+    std::vector<storage::PackedTriangle> triangles;      ///< breadth-first, so level by level
+    /** The root and whole levels below it, in breadth-first order, children contiguous: a
+     *  node's children are in the crown (firstChild) or placed (placedChildren), its triangles
+     *  in crownTriangles (firstTriangle) or, beyond the budget, placed (placedTriangles). */
+    std::vector<BuildNode> crown;
+    std::vector<storage::PackedTriangle> crownTriangles;
+    std::uint64_t nodeCount = 0;                         ///< records in levels
+    std::uint32_t maxLevel = 0;                          ///< deepest level, crown included
+};
+
+/**
+ * Splits a chunk into its crown (the root and as many whole levels below it as fit the
+ * budget's nodes; the crown's triangles, breadth-first, while they fit the budget's triangles)
+ * and the rest, level by level: the records below the crown and the triangles not in
+ * crownTriangles, each level's in breadth-first order (encodeSubtree()'s order). The chunk
+ * must be below 2^32 triangles. Takes ownership of the triangles.
+ */
+LevelledSubtree encodeLevels(
         std::vector<BuildNode> nodes,
         std::vector<storage::PackedTriangle> triangles,
-        std::uint32_t pageSize,
         CrownBudget crownBudget);
 
 /** Writes the subtree's pages and makes its page numbers (the crown's too) final. */

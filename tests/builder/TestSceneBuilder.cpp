@@ -694,10 +694,11 @@ TEST(SceneBuilderTest, PrototypeLargerThanAChunkIsBuiltOutOfCore) {
     ASSERT_GT(scene.storedTriangles(), 2 * chunkTriangles(kThreads));
     const BuildReport first = buildOrFail(scene, dir / "a.ffs", smallOptions(kThreads));
     EXPECT_GT(first.chunks, 1u) << buildReportJson(first);
-    // The run file, then the chunk files (which hold every triangle not kept above the chunks).
+    // The run file, the chunk files (every triangle not kept above the chunks), then the level
+    // files (every triangle and record below the crowns).
     const std::uint64_t runBytes = scene.storedTriangles() * sizeof(storage::PackedTriangle);
-    EXPECT_GT(first.spillBytes, runBytes);
-    EXPECT_LE(first.spillBytes, 2 * runBytes);
+    EXPECT_GT(first.spillBytes, 2 * runBytes);
+    EXPECT_LE(first.spillBytes, 3 * runBytes + first.nodes * sizeof(storage::NodeRecord));
     expectSceneMatches(dir / "a.ffs", scene, first);
 
     // Chunks built on several threads still land in the same order.
@@ -744,6 +745,57 @@ TEST(SceneBuilderTest, ChunksTopLevelsSharePagesWithTheCellsAboveThem) {
         ++depth;
     }
     EXPECT_GT(nodes, 4 * report.chunks); // the walk reached below the chunk roots
+}
+
+// Below the crowns too, a chunked prototype is laid out as if built in one piece: each level's
+// records and triangles, across all chunks, fill shared pages. Written chunk by chunk instead,
+// a level would cost at least a page per chunk that has records (triangles) there, however few
+// (docs/results/paging.md, "Chunks"). At each depth of a breadth-first walk, the records sit in
+// at most a page per nodesPerPage - 7 records (a sibling block of up to 8 that does not fit
+// starts a page) and the triangle runs in a page per trianglesPerPage triangles, plus two for
+// where the level starts in its region and the part of it kept with the cells above the chunks.
+TEST(SceneBuilderTest, ChunkedPrototypeFillsPagesLevelByLevelAcrossChunks) {
+    const fs::path dir = freshTestDir();
+    constexpr unsigned kThreads = 4;
+    const RecordingSink scene = generate("terrain:triangles=120000");
+    const BuildReport report = buildOrFail(scene, dir / "t.ffs", smallOptions(kThreads));
+    ASSERT_GE(report.chunks, 16u) << buildReportJson(report);
+    expectSceneMatches(dir / "t.ffs", scene, report);
+    Result<std::unique_ptr<storage::SceneFile>> opened = storage::SceneFile::open(dir / "t.ffs");
+    ASSERT_TRUE(opened.isOk()) << opened.status().toString();
+    const storage::SceneFile& file = **opened;
+    const std::uint64_t nodesPerPage = storage::nodesPerPage(file.pageSize());
+    const std::uint64_t trianglesPerPage = storage::trianglesPerPage(file.pageSize());
+
+    std::vector<storage::NodeRef> level = {file.prototypes()[0].root};
+    int depths = 0;
+    for (int depth = 0; !level.empty(); ++depth) {
+        std::vector<storage::NodeRef> next;
+        std::set<std::uint32_t> nodePages;
+        std::set<std::uint64_t> geometryPages;
+        std::uint64_t triangles = 0;
+        for (const storage::NodeRef ref : level) {
+            Result<storage::NodeRecord> node = file.node(ref);
+            ASSERT_TRUE(node.isOk()) << node.status().toString();
+            nodePages.insert(ref.page);
+            for (std::uint32_t c = 0; c < node->childCount; ++c)
+                next.push_back(storage::SceneFile::childRef(*node, c));
+            std::vector<storage::GeometrySegment> runs;
+            const Status status = file.geometrySegments(*node, runs);
+            ASSERT_TRUE(status.isOk()) << status.toString();
+            for (const storage::GeometrySegment& run : runs)
+                geometryPages.insert(run.page);
+            triangles += node->geometryCount;
+        }
+        const std::uint64_t records = level.size();
+        EXPECT_LE(nodePages.size(), (records + nodesPerPage - 8) / (nodesPerPage - 7) + 2)
+                << records << " records at depth " << depth << ", " << report.chunks << " chunks";
+        EXPECT_LE(geometryPages.size(), (triangles + trianglesPerPage - 1) / trianglesPerPage + 2)
+                << triangles << " triangles at depth " << depth << ", " << report.chunks << " chunks";
+        level = std::move(next);
+        ++depths;
+    }
+    EXPECT_GE(depths, 8); // the walk went through the chunks to their leaves
 }
 
 // A triangle wider than a cell stops at it; when that cell is a chunk root it must go into the
