@@ -21,7 +21,6 @@ struct ChunkOutput {
     glm::vec3 boundsMax{0.0f};
     PrototypeSummary summary;
     std::uint64_t nodes = 0;
-    std::uint32_t maxDepth = 0;
 };
 
 /** A cell above the chunks of a partitioned prototype. */
@@ -109,7 +108,6 @@ ChunkOutput buildChunk(
     out.summary = std::move(octree.summary);
     out.nodes = octree.nodes.size();
     out.encoded = encodeLevels(std::move(octree.nodes), std::move(triangles), crownBudget);
-    out.maxDepth = out.encoded.maxLevel;
     return out;
 }
 
@@ -349,7 +347,7 @@ Result<PrototypeBuildResult> PrototypeBuilder::buildChunked(
                 return chunk.status();
             FF_RETURN_IF_ERROR(levels.append(chunk->encoded));
             result.nodes += chunk->nodes;
-            result.maxDepth = std::max(result.maxDepth, chunk->maxDepth);
+            result.maxDepth = std::max(result.maxDepth, chunk->encoded.maxLevel);
             for (std::size_t l = 0; l < chunk->summary.cuts.size(); ++l) {
                 auto& cut = result.summary.cuts[l];
                 cut.insert(cut.end(), chunk->summary.cuts[l].begin(), chunk->summary.cuts[l].end());

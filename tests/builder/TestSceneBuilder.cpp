@@ -707,14 +707,36 @@ TEST(SceneBuilderTest, PrototypeLargerThanAChunkIsBuiltOutOfCore) {
     EXPECT_EQ(listDirectory(dir), (std::vector<std::string>{"a.ffs", "b.ffs"}));
 }
 
-// Each chunk is written on its own, so without more care every chunk a coarse cut enters
-// costs fresh pages, however few of its records the cut needs: a cost that grows with the number
-// of chunks, that is with the scene (docs/results/paging.md). The builder lays each chunk's top
-// levels (its crown) out with the cells above the chunks instead. So walking the prototype
-// breadth-first, the levels down to one below the chunk roots (about 5 records per chunk for a
-// terrain, 6 with the cells above) fill their pages as if it had been built in one piece: a page
-// per nodesPerPage - 7 records (a sibling block of up to 8 that does not fit starts a page),
-// plus one for the root.
+/** A node as a breadth-first walk meets it. */
+struct WalkedNode {
+    storage::NodeRef ref;
+    storage::NodeRecord record;
+};
+
+/** Walks the hierarchy under `root` breadth-first: levels[d] holds depth d's nodes, in order. */
+void walkLevels(const storage::SceneFile& file, storage::NodeRef root, std::vector<std::vector<WalkedNode>>& levels) {
+    std::vector<storage::NodeRef> level = {root};
+    while (!level.empty()) {
+        std::vector<storage::NodeRef> next;
+        levels.emplace_back();
+        for (const storage::NodeRef ref : level) {
+            Result<storage::NodeRecord> node = file.node(ref);
+            ASSERT_TRUE(node.isOk()) << node.status().toString();
+            levels.back().push_back({ref, *node});
+            for (std::uint32_t c = 0; c < node->childCount; ++c)
+                next.push_back(storage::SceneFile::childRef(*node, c));
+        }
+        level = std::move(next);
+    }
+}
+
+// Written each on its own, every chunk a coarse cut enters would cost fresh pages, however few
+// of its records the cut needs: a cost that grows with the number of chunks, that is with the
+// scene (docs/results/paging.md). The builder lays each chunk's top levels (its crown) out with
+// the cells above the chunks. So walking the prototype breadth-first, the levels down to one
+// below the chunk roots (about 5 records per chunk for a terrain, 6 with the cells above) fill
+// their pages as if it had been built in one piece: a page per nodesPerPage - 7 records (a
+// sibling block of up to 8 that does not fit starts a page), plus one for the root.
 TEST(SceneBuilderTest, ChunksTopLevelsSharePagesWithTheCellsAboveThem) {
     const fs::path dir = freshTestDir();
     constexpr unsigned kThreads = 4;
@@ -724,25 +746,17 @@ TEST(SceneBuilderTest, ChunksTopLevelsSharePagesWithTheCellsAboveThem) {
     ASSERT_TRUE(opened.isOk()) << opened.status().toString();
     const storage::SceneFile& file = **opened;
     const std::uint64_t perPage = storage::nodesPerPage(file.pageSize());
+    std::vector<std::vector<WalkedNode>> levels;
+    ASSERT_NO_FATAL_FAILURE(walkLevels(file, file.prototypes()[0].root, levels));
 
-    std::vector<storage::NodeRef> level = {file.prototypes()[0].root};
     std::set<std::uint32_t> pages;
     std::uint64_t nodes = 0;
-    int depth = 0;
-    while (!level.empty() && nodes + level.size() <= 6 * report.chunks) {
-        std::vector<storage::NodeRef> next;
-        for (const storage::NodeRef ref : level) {
-            Result<storage::NodeRecord> node = file.node(ref);
-            ASSERT_TRUE(node.isOk()) << node.status().toString();
-            pages.insert(ref.page);
-            for (std::uint32_t c = 0; c < node->childCount; ++c)
-                next.push_back(storage::SceneFile::childRef(*node, c));
-        }
-        nodes += level.size();
+    for (std::size_t depth = 0; depth < levels.size() && nodes + levels[depth].size() <= 6 * report.chunks; ++depth) {
+        for (const WalkedNode& node : levels[depth])
+            pages.insert(node.ref.page);
+        nodes += levels[depth].size();
         EXPECT_LE(pages.size(), (nodes + perPage - 8) / (perPage - 7) + 1)
                 << nodes << " records down to depth " << depth << ", " << report.chunks << " chunks";
-        level = std::move(next);
-        ++depth;
     }
     EXPECT_GT(nodes, 4 * report.chunks); // the walk reached below the chunk roots
 }
@@ -766,36 +780,29 @@ TEST(SceneBuilderTest, ChunkedPrototypeFillsPagesLevelByLevelAcrossChunks) {
     const storage::SceneFile& file = **opened;
     const std::uint64_t nodesPerPage = storage::nodesPerPage(file.pageSize());
     const std::uint64_t trianglesPerPage = storage::trianglesPerPage(file.pageSize());
+    std::vector<std::vector<WalkedNode>> levels;
+    ASSERT_NO_FATAL_FAILURE(walkLevels(file, file.prototypes()[0].root, levels));
+    EXPECT_GE(levels.size(), 8u); // the walk goes through the chunks to their leaves
 
-    std::vector<storage::NodeRef> level = {file.prototypes()[0].root};
-    int depths = 0;
-    for (int depth = 0; !level.empty(); ++depth) {
-        std::vector<storage::NodeRef> next;
+    for (std::size_t depth = 0; depth < levels.size(); ++depth) {
         std::set<std::uint32_t> nodePages;
         std::set<std::uint64_t> geometryPages;
         std::uint64_t triangles = 0;
-        for (const storage::NodeRef ref : level) {
-            Result<storage::NodeRecord> node = file.node(ref);
-            ASSERT_TRUE(node.isOk()) << node.status().toString();
-            nodePages.insert(ref.page);
-            for (std::uint32_t c = 0; c < node->childCount; ++c)
-                next.push_back(storage::SceneFile::childRef(*node, c));
+        for (const WalkedNode& node : levels[depth]) {
+            nodePages.insert(node.ref.page);
             std::vector<storage::GeometrySegment> runs;
-            const Status status = file.geometrySegments(*node, runs);
+            const Status status = file.geometrySegments(node.record, runs);
             ASSERT_TRUE(status.isOk()) << status.toString();
             for (const storage::GeometrySegment& run : runs)
                 geometryPages.insert(run.page);
-            triangles += node->geometryCount;
+            triangles += node.record.geometryCount;
         }
-        const std::uint64_t records = level.size();
+        const std::uint64_t records = levels[depth].size();
         EXPECT_LE(nodePages.size(), (records + nodesPerPage - 8) / (nodesPerPage - 7) + 2)
                 << records << " records at depth " << depth << ", " << report.chunks << " chunks";
         EXPECT_LE(geometryPages.size(), (triangles + trianglesPerPage - 1) / trianglesPerPage + 2)
                 << triangles << " triangles at depth " << depth << ", " << report.chunks << " chunks";
-        level = std::move(next);
-        ++depths;
     }
-    EXPECT_GE(depths, 8); // the walk went through the chunks to their leaves
 }
 
 // A triangle wider than a cell stops at it; when that cell is a chunk root it must go into the
