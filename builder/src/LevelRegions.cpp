@@ -2,6 +2,7 @@
 
 #include <ff/storage/Assert.h>
 
+#include <algorithm>
 #include <cstring>
 #include <span>
 
@@ -14,19 +15,22 @@ constexpr std::size_t kSpillBufferBytes = 64u << 10;
 
 } // namespace
 
-LevelRegions::Region::Region(const std::filesystem::path& recordPath, const std::filesystem::path& trianglePath)
-    : records(recordPath), triangles(trianglePath) {
+LevelRegions::Region::Region(const std::filesystem::path& recordPath) : records(recordPath) {
     records.setBufferLimit(kSpillBufferBytes);
-    triangles.setBufferLimit(kSpillBufferBytes);
 }
 
-LevelRegions::LevelRegions(std::filesystem::path directory, std::string prefix, std::uint32_t pageSize)
-    : mDirectory(std::move(directory)), mPrefix(std::move(prefix)), mPageSize(pageSize) {}
+LevelRegions::LevelRegions(
+        storage::SceneWriter& writer, std::filesystem::path directory, std::string prefix, std::uint64_t extentBytes)
+    : mWriter(writer)
+    , mDirectory(std::move(directory))
+    , mPrefix(std::move(prefix))
+    , mPageSize(writer.pageSize())
+    , mExtentTriangles(std::max<std::uint64_t>(extentBytes / mPageSize, 1) * storage::trianglesPerPage(mPageSize)) {}
 
 LevelRegions::Region& LevelRegions::region(std::uint32_t level) {
     while (mRegions.size() <= level) {
-        const std::string name = mPrefix + "-level" + std::to_string(mRegions.size());
-        mRegions.push_back(std::make_unique<Region>(mDirectory / (name + ".nodes"), mDirectory / (name + ".run")));
+        const std::string name = mPrefix + "-level" + std::to_string(mRegions.size()) + ".nodes";
+        mRegions.push_back(std::make_unique<Region>(mDirectory / name));
     }
     return *mRegions[level];
 }
@@ -41,20 +45,40 @@ storage::NodeRef LevelRegions::placeBlock(Region& r, std::uint32_t count) {
     return first;
 }
 
-TriangleSlot LevelRegions::triangleSlot(std::uint64_t index) const {
+Result<TriangleSlot> LevelRegions::placeRun(Region& r, std::span<const storage::PackedTriangle> run) {
+    if (!r.extent.empty() && r.extent.size() + run.size() > mExtentTriangles)
+        FF_RETURN_IF_ERROR(writeExtent(r));
     const std::uint64_t perPage = storage::trianglesPerPage(mPageSize);
-    return {static_cast<std::uint32_t>(index / perPage), static_cast<std::uint32_t>(index % perPage)};
+    const std::uint64_t at = r.extent.size();
+    r.extent.insert(r.extent.end(), run.begin(), run.end());
+    return TriangleSlot{r.extentFirstPage + static_cast<std::uint32_t>(at / perPage), static_cast<std::uint32_t>(at % perPage)};
+}
+
+Status LevelRegions::writeExtent(Region& r) {
+    const std::uint64_t perPage = storage::trianglesPerPage(mPageSize);
+    for (std::uint64_t first = 0; first < r.extent.size(); first += perPage) {
+        const std::uint64_t count = std::min<std::uint64_t>(perPage, r.extent.size() - first);
+        FF_ASSIGN_OR_RETURN(
+                const std::uint64_t page,
+                mWriter.appendPage(storage::PageType::Geometry, std::as_bytes(std::span(r.extent).subspan(first, count))));
+        if (page > 0xFFFFFFFFull)
+            return Status(ErrorCode::Unsupported, "scene needs more than 2^32 pages; use a larger --page-size");
+        r.geometryPage.push_back(static_cast<std::uint32_t>(page));
+    }
+    r.extentFirstPage = static_cast<std::uint32_t>(r.geometryPage.size());
+    if (r.extent.capacity() > mExtentTriangles) // a run longer than an extent: do not keep its memory
+        r.extent = std::vector<storage::PackedTriangle>();
+    r.extent.clear();
+    return Status::ok();
 }
 
 Status LevelRegions::append(LevelledSubtree& chunk) {
     const std::size_t depths = chunk.levels.size();
     // Where each record lands. Each level is placed on its own, block after block.
     std::vector<std::vector<storage::NodeRef>> where(depths);
-    std::vector<std::uint64_t> triangleBase(depths);
     for (std::size_t d = 0; d < depths; ++d) {
         Region& r = region(chunk.rootLevel + static_cast<std::uint32_t>(d));
         const LevelledSubtree::Level& level = chunk.levels[d];
-        triangleBase[d] = r.triangleCount;
         where[d].reserve(level.records.size());
         for (const std::uint8_t count : level.blocks) {
             const storage::NodeRef first = placeBlock(r, count);
@@ -63,64 +87,64 @@ Status LevelRegions::append(LevelledSubtree& chunk) {
         }
         FF_ASSERT(where[d].size() == level.records.size());
     }
+    BuildNode& root = chunk.root;
     for (std::size_t d = 0; d < depths; ++d) {
         Region& r = region(chunk.rootLevel + static_cast<std::uint32_t>(d));
         LevelledSubtree::Level& level = chunk.levels[d];
+        const auto triangles = std::span(chunk.triangles).subspan(level.triangleBegin, level.triangleCount);
+        if (d == 0 && root.placedTriangles) {
+            FF_ASSIGN_OR_RETURN(root.placedTriangles, placeRun(r, triangles.subspan(root.placedTriangles->slot, root.triangleCount)));
+        }
         for (storage::NodeRecord& record : level.records) {
             FF_ASSERT(record.kind == static_cast<std::uint8_t>(storage::NodeKind::Cell));
             if (record.childCount > 0)
                 record.firstChild = where.at(d + 1).at(record.firstChild.slot);
             if (record.geometryCount > 0) {
-                const TriangleSlot start = triangleSlot(triangleBase[d] + record.geometryFirst);
+                FF_ASSIGN_OR_RETURN(const TriangleSlot start, placeRun(r, triangles.subspan(record.geometryFirst, record.geometryCount)));
                 record.geometryPage = start.page;
                 record.geometryFirst = start.slot;
             }
         }
         FF_RETURN_IF_ERROR(r.records.append(level.records));
-        FF_RETURN_IF_ERROR(r.triangles.append(std::span(chunk.triangles).subspan(level.triangleBegin, level.triangleCount)));
-        r.triangleCount += level.triangleCount;
     }
-    for (BuildNode& node : chunk.crown) {
-        const std::size_t d = node.level - chunk.rootLevel;
-        if (node.placedChildren)
-            node.placedChildren = where.at(d + 1).at(node.placedChildren->slot);
-        if (node.placedTriangles)
-            node.placedTriangles = triangleSlot(triangleBase[d] + node.placedTriangles->slot);
-    }
+    if (root.placedChildren)
+        root.placedChildren = where.at(1).at(root.placedChildren->slot);
     // Free the memory, not just the elements (see commitSubtree).
     chunk.levels = std::vector<LevelledSubtree::Level>();
     chunk.triangles = std::vector<storage::PackedTriangle>();
     return Status::ok();
 }
 
-Status LevelRegions::writeTo(storage::SceneWriter& writer) {
-    FF_ASSERT(writer.pageSize() == mPageSize);
-    const std::uint32_t trianglesPerPage = storage::trianglesPerPage(mPageSize);
+Status LevelRegions::finish(const std::function<void(std::uint64_t done, std::uint64_t total)>& pagesCopied) {
+    FF_ASSERT(mWriter.pageSize() == mPageSize);
     for (const auto& r : mRegions) {
-        r->firstGeometryPage = writer.nextPageIndex();
-        if (r->triangleCount > 0) {
-            FF_RETURN_IF_ERROR(r->triangles.forEachBatch(trianglesPerPage, [&](std::span<const storage::PackedTriangle> page) {
-                return writer.appendPage(storage::PageType::Geometry, std::as_bytes(page)).status();
-            }));
-        }
-        r->triangles.remove(); // disk space comes back level by level
+        FF_RETURN_IF_ERROR(writeExtent(*r));
+        r->extent = std::vector<storage::PackedTriangle>();
     }
-    std::uint64_t next = writer.nextPageIndex();
+    const std::uint64_t totalPages = nodePages();
+    std::uint64_t copied = 0;
+    const auto pageWritten = [&] {
+        if (pagesCopied)
+            pagesCopied(++copied, totalPages);
+    };
+    std::uint64_t next = mWriter.nextPageIndex();
     for (const auto& r : mRegions) {
         r->firstNodePage = next;
         next += r->pageFill.size();
     }
+    if (next > 0xFFFFFFFFull)
+        return Status(ErrorCode::Unsupported, "scene needs more than 2^32 pages; use a larger --page-size");
     for (std::size_t level = 0; level < mRegions.size(); ++level) {
         const Region* below = level + 1 < mRegions.size() ? mRegions[level + 1].get() : nullptr;
-        FF_RETURN_IF_ERROR(copyNodePages(*mRegions[level], below, writer));
+        FF_RETURN_IF_ERROR(copyNodePages(*mRegions[level], below, pageWritten));
     }
     return Status::ok();
 }
 
-Status LevelRegions::copyNodePages(Region& r, const Region* below, storage::SceneWriter& writer) {
+Status LevelRegions::copyNodePages(Region& r, const Region* below, const std::function<void()>& pageWritten) {
     if (r.pageFill.empty())
         return Status::ok();
-    FF_ASSERT(writer.nextPageIndex() == r.firstNodePage);
+    FF_ASSERT(mWriter.nextPageIndex() == r.firstNodePage);
     std::vector<storage::NodeRecord> pending; // records read but not yet written, < 2 pages
     std::vector<std::byte> payload;
     std::size_t page = 0;
@@ -137,10 +161,11 @@ Status LevelRegions::copyNodePages(Region& r, const Region* below, storage::Scen
                     record.firstChild.page += static_cast<std::uint32_t>(below->firstNodePage);
                 }
                 if (record.geometryCount > 0)
-                    record.geometryPage += static_cast<std::uint32_t>(r.firstGeometryPage);
+                    record.geometryPage = r.geometryPage.at(record.geometryPage);
                 std::memcpy(payload.data() + i * sizeof(record), &record, sizeof(record));
             }
-            FF_RETURN_IF_ERROR(writer.appendPage(storage::PageType::Nodes, payload).status());
+            FF_RETURN_IF_ERROR(mWriter.appendPage(storage::PageType::Nodes, payload).status());
+            pageWritten();
             used += count;
             ++page;
         }
@@ -157,7 +182,7 @@ storage::NodeRef LevelRegions::absoluteChildren(std::uint32_t level, storage::No
 }
 
 TriangleSlot LevelRegions::absoluteTriangles(std::uint32_t level, TriangleSlot start) const {
-    return {start.page + static_cast<std::uint32_t>(mRegions.at(level)->firstGeometryPage), start.slot};
+    return {mRegions.at(level)->geometryPage.at(start.page), start.slot};
 }
 
 std::uint64_t LevelRegions::nodePages() const noexcept {
@@ -168,17 +193,16 @@ std::uint64_t LevelRegions::nodePages() const noexcept {
 }
 
 std::uint64_t LevelRegions::geometryPages() const noexcept {
-    const std::uint64_t perPage = storage::trianglesPerPage(mPageSize);
     std::uint64_t pages = 0;
     for (const auto& r : mRegions)
-        pages += (r->triangleCount + perPage - 1) / perPage;
+        pages += r->geometryPage.size();
     return pages;
 }
 
 std::uint64_t LevelRegions::spillBytes() const noexcept {
     std::uint64_t bytes = 0;
     for (const auto& r : mRegions)
-        bytes += r->records.bytesWritten() + r->triangles.bytesWritten();
+        bytes += r->records.bytesWritten();
     return bytes;
 }
 

@@ -34,13 +34,12 @@ struct BuildNode {
     std::uint64_t firstTriangle = 0; ///< own triangles: [firstTriangle, +triangleCount)
     std::uint64_t triangleCount = 0;
     std::uint32_t instanceIndex = 0; ///< kind == Instance
-    /** Set when the node's children are placed elsewhere (a chunk crown's lowest level): the
-     *  ref of the first child, a page of the scene file once the chunks' level regions are
-     *  written (LevelRegions); `firstChild` is unused. */
+    /** Set when the node's children are placed elsewhere (a chunk's root): the ref of the
+     *  first child, a page of the scene file once the chunks' level regions are written
+     *  (LevelRegions); `firstChild` is unused. */
     std::optional<storage::NodeRef> placedChildren;
-    /** Set when the node's own triangles are placed elsewhere (a crown node whose triangles
-     *  did not fit the crown's budget): where their run starts, final once the level regions
-     *  are written; `firstTriangle` is unused. */
+    /** Set when the node's own triangles are placed elsewhere (a chunk's root): where their
+     *  run starts, final once the level regions are written; `firstTriangle` is unused. */
     std::optional<TriangleSlot> placedTriangles;
 };
 

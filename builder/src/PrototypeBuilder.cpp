@@ -98,7 +98,6 @@ ChunkOutput buildChunk(
         const Cell& cell,
         int level,
         int octant,
-        CrownBudget crownBudget,
         const HierarchyParams& params) {
     BuiltOctree octree = buildInMemoryOctree(triangles, cell, level, octant, params);
     ChunkOutput out;
@@ -107,7 +106,7 @@ ChunkOutput buildChunk(
     out.boundsMax = octree.boundsMax;
     out.summary = std::move(octree.summary);
     out.nodes = octree.nodes.size();
-    out.encoded = encodeLevels(std::move(octree.nodes), std::move(triangles), crownBudget);
+    out.encoded = encodeLevels(std::move(octree.nodes), std::move(triangles));
     return out;
 }
 
@@ -123,16 +122,18 @@ PrototypeBuilder::PrototypeBuilder(
         storage::SceneWriter& writer,
         const HierarchyParams& params,
         std::uint64_t chunkTriangles,
-        std::uint64_t crownBytes,
+        std::uint64_t levelExtentBytes,
         unsigned threads,
-        std::filesystem::path tempDirectory)
+        std::filesystem::path tempDirectory,
+        std::function<void(const BuildProgress&)> progress)
     : mWriter(writer)
     , mParams(params)
     // Below 2^32: the encoder orders a chunk's triangles through 32-bit indices (encodeLevels).
     , mChunkTriangles(std::clamp<std::uint64_t>(chunkTriangles, 1024, 0xFFFFFFFEull))
-    , mCrownBytes(crownBytes)
+    , mLevelExtentBytes(levelExtentBytes)
     , mThreads(std::max(threads, 1u))
-    , mTempDirectory(std::move(tempDirectory)) {}
+    , mTempDirectory(std::move(tempDirectory))
+    , mProgress(std::move(progress)) {}
 
 Result<PrototypeBuildResult> PrototypeBuilder::build(
         std::uint32_t prototypeId,
@@ -186,10 +187,14 @@ Result<PrototypeBuildResult> PrototypeBuilder::buildChunked(
     // denser than the chosen level resolves is counted again at a finer level.
     std::vector<TopNode> top;
     std::vector<std::uint32_t> chunkNodes; // top-node index of each chunk, in Morton order
-    int countLevel = chooseCountLevel(triangles.count(), mChunkTriangles);
+    const std::uint64_t triangleCount = triangles.count();
+    int countLevel = chooseCountLevel(triangleCount, mChunkTriangles);
     while (true) {
         std::vector<std::unordered_map<std::uint64_t, std::uint64_t>> counts(static_cast<std::size_t>(countLevel + 1));
+        std::uint64_t counted = 0;
         FF_RETURN_IF_ERROR(triangles.forEachBatch(1u << 15, [&](std::span<const storage::PackedTriangle> batch) {
+            counted += batch.size();
+            report("count", counted, triangleCount);
             for (const storage::PackedTriangle& t : batch) {
                 const float size = extent(t);
                 float cellSize = root.size;
@@ -267,7 +272,10 @@ Result<PrototypeBuildResult> PrototypeBuilder::buildChunked(
         chunkFiles.back().setBufferLimit(bufferBytes);
     }
     std::uint64_t topTriangles = 0;
+    std::uint64_t distributed = 0;
     FF_RETURN_IF_ERROR(triangles.forEachBatch(1u << 15, [&](std::span<const storage::PackedTriangle> batch) -> Status {
+        distributed += batch.size();
+        report("partition", distributed, triangleCount);
         for (const storage::PackedTriangle& t : batch) {
             const std::uint64_t key = cellKey(root, centroid(t), countLevel);
             const float size = extent(t);
@@ -310,20 +318,11 @@ Result<PrototypeBuildResult> PrototypeBuilder::buildChunked(
     // least a node page and a geometry page however little of it the frame needs, a cost that
     // grows with the number of chunks, that is with the scene (docs/results/paging.md). So the
     // chunks are laid out level by level across all of them (LevelRegions), and each chunk's
-    // top levels, its crown, wait in memory and are laid out with the cells above the chunks:
-    // the whole prototype then shares pages level by level, as if it had been built in one
-    // piece. A crown holds at least the chunk's root and at most a page of records, in up to
-    // half its share of the memory; its triangles take the rest of that share, and those that
-    // do not fit stay in the chunk's levels.
-    const std::uint64_t crownShare = mCrownBytes / std::max<std::size_t>(chunkNodes.size(), 1);
-    CrownBudget crownBudget;
-    crownBudget.nodes = std::clamp<std::uint64_t>(crownShare / 2 / sizeof(BuildNode), 1, storage::nodesPerPage(mWriter.pageSize()));
-    crownBudget.triangles = crownShare > crownBudget.nodes * sizeof(BuildNode)
-            ? (crownShare - crownBudget.nodes * sizeof(BuildNode)) / sizeof(storage::PackedTriangle)
-            : 0;
+    // root waits in memory for the cells above the chunks: the whole prototype then shares
+    // pages level by level, as if it had been built in one piece.
     PrototypeBuildResult result;
     result.chunks = chunkNodes.size();
-    LevelRegions levels(mTempDirectory, "proto" + std::to_string(prototypeId), mWriter.pageSize());
+    LevelRegions levels(mWriter, mTempDirectory, "proto" + std::to_string(prototypeId), mLevelExtentBytes);
     std::vector<ChunkOutput> finished(chunkNodes.size());
     for (std::size_t begin = 0; begin < chunkNodes.size(); begin += mThreads) {
         const std::size_t end = std::min<std::size_t>(begin + mThreads, chunkNodes.size());
@@ -335,10 +334,10 @@ Result<PrototypeBuildResult> PrototypeBuilder::buildChunked(
             const int level = node.level;
             const int octant = node.octant;
             const HierarchyParams params = mParams;
-            running.push_back(std::async(std::launch::async, [file, cell, level, octant, crownBudget, params]() -> Result<ChunkOutput> {
+            running.push_back(std::async(std::launch::async, [file, cell, level, octant, params]() -> Result<ChunkOutput> {
                 FF_ASSIGN_OR_RETURN(std::vector<storage::PackedTriangle> chunkTriangles, file->readAll());
                 file->remove();
-                return buildChunk(std::move(chunkTriangles), cell, level, octant, crownBudget, params);
+                return buildChunk(std::move(chunkTriangles), cell, level, octant, params);
             }));
         }
         for (std::size_t c = begin; c < end; ++c) {
@@ -354,11 +353,12 @@ Result<PrototypeBuildResult> PrototypeBuilder::buildChunked(
             }
             chunk->summary = {};
             finished[c] = std::move(chunk.value());
+            report("chunks", c + 1, chunkNodes.size());
         }
     }
+    FF_RETURN_IF_ERROR(levels.finish([this](std::uint64_t done, std::uint64_t total) { report("layout", done, total); }));
     result.geometryPages += levels.geometryPages();
     result.nodePages += levels.nodePages();
-    FF_RETURN_IF_ERROR(levels.writeTo(mWriter));
     spillBytes += levels.spillBytes();
 
     // ---- the top tree: cells above the chunks, composited from them --------------------------
@@ -379,7 +379,7 @@ Result<PrototypeBuildResult> PrototypeBuilder::buildChunked(
         n.triangleCount = t.own.size();
         ownTriangles.insert(ownTriangles.end(), t.own.begin(), t.own.end());
         t.own = {};
-        if (t.chunk >= 0) { // stands for the chunk's crown until it is spliced in below
+        if (t.chunk >= 0) { // stands for the chunk's root until it is put in below
             const ChunkOutput& chunk = finished[static_cast<std::size_t>(t.chunk)];
             n.cube = chunk.rootCube;
             n.boundsMin = chunk.boundsMin;
@@ -415,38 +415,21 @@ Result<PrototypeBuildResult> PrototypeBuilder::buildChunked(
     const glm::vec3 boundsMin = nodes[0].boundsMin;
     const glm::vec3 boundsMax = nodes[0].boundsMax;
 
-    // Splice each chunk's crown in: its root replaces the chunk's cell, the rest goes after.
-    std::uint64_t crownNodes = 0;
+    // Each chunk's root replaces the chunk's cell; its children and triangles are in the levels.
     for (std::size_t i = 0; i < top.size(); ++i) {
         if (top[i].chunk < 0)
             continue;
-        LevelledSubtree& chunk = finished[static_cast<std::size_t>(top[i].chunk)].encoded;
-        const std::size_t base = nodes.size() - 1; // crown position k > 0 lands at base + k
-        const std::uint64_t triangleBase = ownTriangles.size();
-        for (std::size_t k = 0; k < chunk.crown.size(); ++k) {
-            BuildNode node = std::move(chunk.crown[k]);
-            if (node.placedChildren)
-                node.placedChildren = levels.absoluteChildren(node.level + 1u, *node.placedChildren);
-            else if (node.childCount > 0)
-                node.firstChild = static_cast<std::uint32_t>(base + node.firstChild);
-            if (node.placedTriangles)
-                node.placedTriangles = levels.absoluteTriangles(node.level, *node.placedTriangles);
-            else
-                node.firstTriangle += triangleBase;
-            if (k == 0)
-                nodes[i] = std::move(node);
-            else
-                nodes.push_back(std::move(node));
-        }
-        ownTriangles.insert(ownTriangles.end(), chunk.crownTriangles.begin(), chunk.crownTriangles.end());
-        crownNodes += chunk.crown.size();
-        chunk.crown = std::vector<BuildNode>();
-        chunk.crownTriangles = std::vector<storage::PackedTriangle>();
+        BuildNode chunkRoot = std::move(finished[static_cast<std::size_t>(top[i].chunk)].encoded.root);
+        if (chunkRoot.placedChildren)
+            chunkRoot.placedChildren = levels.absoluteChildren(chunkRoot.level + 1u, *chunkRoot.placedChildren);
+        if (chunkRoot.placedTriangles)
+            chunkRoot.placedTriangles = levels.absoluteTriangles(chunkRoot.level, *chunkRoot.placedTriangles);
+        nodes[i] = std::move(chunkRoot);
     }
     EncodedSubtree encoded = encodeSubtree(std::move(nodes), std::move(ownTriangles), mWriter.pageSize());
     result.geometryPages += encoded.geometryPageCount(mWriter.pageSize());
     result.nodePages += encoded.nodePages.size();
-    result.nodes += encoded.nodeCount - crownNodes; // crowns were counted with their chunks
+    result.nodes += encoded.nodeCount - chunkNodes.size(); // the roots were counted with their chunks
     FF_RETURN_IF_ERROR(commitSubtree(mWriter, encoded));
     result.record.root = encoded.rootRef;
     result.record.boundsMin = {boundsMin.x, boundsMin.y, boundsMin.z};

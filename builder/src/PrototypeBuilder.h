@@ -11,6 +11,7 @@
 #include <array>
 #include <cstdint>
 #include <filesystem>
+#include <functional>
 #include <vector>
 
 namespace ff::builder {
@@ -48,9 +49,12 @@ inline constexpr std::uint64_t kChunkBytesPerTriangle = 160;
 /**
  * Builds one prototype's octree from its run file and appends its pages to `writer`. A
  * prototype larger than one chunk (chunkTriangles) is partitioned out of core first, and its
- * chunks are laid out level by level across all of them (LevelRegions). Each chunk's top
- * levels (its crown, at most a page of records and crownBytes across all chunks) are held back
- * and written with the cells above the chunks, in one breadth-first order.
+ * chunks are laid out level by level across all of them (LevelRegions). Each chunk's root is
+ * held back and written with the cells above the chunks.
+ *
+ * A chunked build reports its progress through `progress`: "count" and "partition" (triangles
+ * of the run file read, in each of the two passes), "chunks" (chunks placed) and "layout"
+ * (node pages copied from the level files into the scene file).
  */
 class PrototypeBuilder {
 public:
@@ -58,9 +62,10 @@ public:
             storage::SceneWriter& writer,
             const HierarchyParams& params,
             std::uint64_t chunkTriangles,
-            std::uint64_t crownBytes,
+            std::uint64_t levelExtentBytes,
             unsigned threads,
-            std::filesystem::path tempDirectory);
+            std::filesystem::path tempDirectory,
+            std::function<void(const BuildProgress&)> progress = {});
 
     /** Builds and writes the prototype in `triangles` (consumed). Adds the bytes of the chunk
      *  files it writes to `spillBytes`; the run file itself is the caller's to count. */
@@ -80,9 +85,15 @@ private:
     storage::SceneWriter& mWriter;
     const HierarchyParams& mParams;
     std::uint64_t mChunkTriangles;
-    std::uint64_t mCrownBytes; ///< memory for the chunks' crowns, all chunks together
+    std::uint64_t mLevelExtentBytes; ///< memory per octree level for triangles on their way out (LevelRegions)
     unsigned mThreads;
     std::filesystem::path mTempDirectory;
+    std::function<void(const BuildProgress&)> mProgress;
+
+    void report(const char* phase, std::uint64_t done, std::uint64_t total) const {
+        if (mProgress)
+            mProgress({phase, done, total});
+    }
 };
 
 } // namespace ff::builder

@@ -241,11 +241,15 @@ Result<BuildReport> SceneBuilder::finish() {
 
     // ---- partition + buildHierarchy, one prototype at a time ---------------------------------
     const std::uint64_t fixedReserve = std::min<std::uint64_t>(s.options.memoryBudgetBytes / 4, 64ull << 20);
-    const std::uint64_t crownReserve = s.options.memoryBudgetBytes / 16; // chunks' crowns, PrototypeBuilder.h
-    const std::uint64_t chunkBudget = (s.options.memoryBudgetBytes - fixedReserve - crownReserve) / s.options.threads;
+    const std::uint64_t chunkBudget = (s.options.memoryBudgetBytes - fixedReserve) / s.options.threads;
     const std::uint64_t chunkTriangles = chunkBudget / kChunkBytesPerTriangle;
+    // Out of the fixed reserve: a chunked prototype gathers each octree level's triangles in an
+    // extent of this size, budget/256 up to 1 MiB, before writing them (at most maxDepth + 1
+    // levels: 21 MiB at 1 GiB).
+    const std::uint64_t levelExtentBytes = std::min<std::uint64_t>(fixedReserve / 64, 1u << 20);
     PrototypeBuilder protoBuilder(
-            *s.writer, s.options.hierarchy, chunkTriangles, crownReserve, s.options.threads, s.tempDirectory);
+            *s.writer, s.options.hierarchy, chunkTriangles, levelExtentBytes, s.options.threads, s.tempDirectory,
+            s.options.progress);
     // Prototypes left without triangles get no record (a record needs a root node): the table
     // holds the others in declaration order, and storedIndex maps declared ids to it.
     constexpr std::uint32_t kNotStored = std::numeric_limits<std::uint32_t>::max();

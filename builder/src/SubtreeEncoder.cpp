@@ -101,106 +101,6 @@ BreadthFirst breadthFirst(const std::vector<BuildNode>& nodes) {
     return out;
 }
 
-/** The crown: the first `size` nodes of the breadth-first order; its lowest level starts at
- *  position `lowest` (depth `lowestDepth`). The children of that level and of every level below
- *  are placed. */
-struct CrownExtent {
-    std::size_t size = 0;
-    std::size_t lowest = 0;
-    std::size_t lowestDepth = 0;
-};
-
-/** The root and the whole levels below it that fit the budget. */
-CrownExtent chooseCrown(const BreadthFirst& bf, CrownBudget budget) {
-    CrownExtent crown;
-    for (std::size_t d = 0; d < bf.levelEnd.size(); ++d) {
-        if (d > 0 && bf.levelEnd[d] > budget.nodes)
-            break;
-        crown.lowest = d == 0 ? 0 : bf.levelEnd[d - 1];
-        crown.lowestDepth = d;
-        crown.size = bf.levelEnd[d];
-    }
-    return crown;
-}
-
-/**
- * Crown nodes come first in breadth-first order, and so do their triangles (ordered): those
- * that fit the budget move to `crownTriangles` in the same order, the others close up at the
- * front and stay with the subtree. Afterwards a crown node's firstTriangle indexes whichever
- * vector holds its triangles, and every other node's is `moved` too high.
- */
-struct CrownTriangleSplit {
-    std::vector<bool> keptInSubtree; ///< per crown position
-    std::uint64_t moved = 0;
-};
-
-CrownTriangleSplit splitCrownTriangles(
-        std::vector<BuildNode>& nodes,
-        const BreadthFirst& bf,
-        const CrownExtent& crown,
-        std::uint64_t budgetTriangles,
-        std::vector<storage::PackedTriangle>& triangles,
-        std::vector<storage::PackedTriangle>& crownTriangles) {
-    CrownTriangleSplit split;
-    split.keptInSubtree.assign(crown.size, false);
-    std::uint64_t crownSpan = 0;
-    std::uint64_t kept = 0;
-    for (std::size_t i = 0; i < crown.size; ++i) {
-        BuildNode& node = nodes[bf.order[i]];
-        crownSpan += node.triangleCount;
-        if (node.triangleCount == 0)
-            continue;
-        const auto first = triangles.begin() + static_cast<std::ptrdiff_t>(node.firstTriangle);
-        const auto last = first + static_cast<std::ptrdiff_t>(node.triangleCount);
-        if (crownTriangles.size() + node.triangleCount <= budgetTriangles) {
-            node.firstTriangle = crownTriangles.size();
-            crownTriangles.insert(crownTriangles.end(), first, last);
-        } else {
-            if (kept != node.firstTriangle) // kept < firstTriangle: a move to the front
-                std::move(first, last, triangles.begin() + static_cast<std::ptrdiff_t>(kept));
-            node.firstTriangle = kept;
-            kept += node.triangleCount;
-            split.keptInSubtree[i] = true;
-        }
-    }
-    split.moved = crownSpan - kept;
-    triangles.erase(triangles.begin() + static_cast<std::ptrdiff_t>(kept), triangles.begin() + static_cast<std::ptrdiff_t>(crownSpan));
-    return split;
-}
-
-/**
- * The crown, renumbered in breadth-first order: children follow in the order their parents
- * come, so a cursor over the positions after the root hands out each first child. The lowest
- * level's children get childRef(firstChild), the triangles kept in the subtree
- * triangleRef(position, node).
- */
-template <class ChildRef, class TriangleRef>
-std::vector<BuildNode> takeCrown(
-        const std::vector<BuildNode>& nodes,
-        const BreadthFirst& bf,
-        const CrownExtent& crown,
-        const CrownTriangleSplit& split,
-        ChildRef childRef,
-        TriangleRef triangleRef) {
-    std::vector<BuildNode> out;
-    out.reserve(crown.size);
-    std::size_t nextPosition = 1;
-    for (std::size_t i = 0; i < crown.size; ++i) {
-        BuildNode node = nodes[bf.order[i]];
-        FF_ASSERT(!node.placedChildren && !node.placedTriangles); // only the tree above the crowns has those
-        if (split.keptInSubtree[i])
-            node.placedTriangles = triangleRef(i, node);
-        if (node.childCount > 0 && i >= crown.lowest) {
-            node.placedChildren = childRef(node.firstChild);
-        } else if (node.childCount > 0) {
-            node.firstChild = static_cast<std::uint32_t>(nextPosition);
-            nextPosition += node.childCount;
-        }
-        out.push_back(std::move(node));
-    }
-    return out;
-}
-
 } // namespace
 
 std::uint64_t EncodedSubtree::geometryPageCount(std::uint32_t pageSize) const {
@@ -280,24 +180,18 @@ EncodedSubtree encodeSubtree(
     return out;
 }
 
-LevelledSubtree encodeLevels(
-        std::vector<BuildNode> nodes,
-        std::vector<storage::PackedTriangle> triangles,
-        CrownBudget crownBudget) {
-    FF_ASSERT(!nodes.empty() && crownBudget.nodes > 0);
+LevelledSubtree encodeLevels(std::vector<BuildNode> nodes, std::vector<storage::PackedTriangle> triangles) {
+    FF_ASSERT(!nodes.empty());
     const BreadthFirst bf = breadthFirst(nodes);
-    const CrownExtent crown = chooseCrown(bf, crownBudget);
     const bool ordered = orderGeometryBreadthFirst(nodes, bf.order, triangles);
     FF_ASSERT(ordered); // PrototypeBuilder keeps chunks below 2^32 triangles
 
     LevelledSubtree out;
-    const CrownTriangleSplit split = splitCrownTriangles(nodes, bf, crown, crownBudget.triangles, triangles, out.crownTriangles);
     const std::size_t depths = bf.levelEnd.size();
     out.rootLevel = nodes[0].level;
     out.levels.resize(depths);
 
-    // Where each node sits in the order, and where its triangles now start (crown nodes that
-    // kept theirs were renumbered by the split, the others are `moved` too high).
+    // Where each node sits in the order, and at which depth.
     std::vector<std::uint32_t> position(nodes.size());
     std::vector<std::size_t> depthOf(bf.order.size());
     for (std::size_t d = 0, i = 0; d < depths; ++d)
@@ -305,34 +199,30 @@ LevelledSubtree encodeLevels(
             position[bf.order[i]] = static_cast<std::uint32_t>(i);
             depthOf[i] = d;
         }
-    auto subtreeTriangle = [&](std::size_t i, const BuildNode& node) {
-        return i < crown.size ? node.firstTriangle : node.firstTriangle - split.moved;
-    };
-    // The triangles stay in breadth-first order, hence level by level: each level's share is a
+    // The triangles are in breadth-first order, hence level by level: each level's share is a
     // range of `triangles`, and a node's local offset is where its run starts in that range.
     std::vector<std::uint64_t> levelTriangles(depths + 1, 0);
-    for (std::size_t i = 0; i < bf.order.size(); ++i) {
-        const bool moved = i < crown.size && !split.keptInSubtree[i];
-        if (!moved)
-            levelTriangles[depthOf[i] + 1] += nodes[bf.order[i]].triangleCount;
-    }
+    for (std::size_t i = 0; i < bf.order.size(); ++i)
+        levelTriangles[depthOf[i] + 1] += nodes[bf.order[i]].triangleCount;
     for (std::size_t d = 0; d < depths; ++d) {
         levelTriangles[d + 1] += levelTriangles[d];
         out.levels[d].triangleBegin = levelTriangles[d];
         out.levels[d].triangleCount = levelTriangles[d + 1] - levelTriangles[d];
     }
-    auto localTriangle = [&](std::size_t i, const BuildNode& node) {
-        return subtreeTriangle(i, node) - levelTriangles[depthOf[i]];
+    auto localTriangle = [&](std::size_t i) {
+        return nodes[bf.order[i]].firstTriangle - levelTriangles[depthOf[i]];
     };
 
-    // Sibling blocks in breadth-first order: the crown's lowest level has the first blocks
-    // below the crown, every placed node those of the levels under it.
-    for (std::size_t i = crown.lowest; i < crown.size; ++i) {
-        const BuildNode& node = nodes[bf.order[i]];
-        if (node.childCount > 0)
-            out.levels[crown.lowestDepth + 1].blocks.push_back(static_cast<std::uint8_t>(node.childCount));
+    // The root is kept back; every other record goes to its level, and the sibling blocks
+    // follow the breadth-first order, the root's first.
+    out.root = nodes[0];
+    if (out.root.childCount > 0) {
+        out.levels[1].blocks.push_back(static_cast<std::uint8_t>(out.root.childCount));
+        out.root.placedChildren = storage::NodeRef{0, position[out.root.firstChild] - static_cast<std::uint32_t>(bf.levelEnd[0])};
     }
-    for (std::size_t i = crown.size; i < bf.order.size(); ++i) {
+    if (out.root.triangleCount > 0)
+        out.root.placedTriangles = TriangleSlot{0, static_cast<std::uint32_t>(localTriangle(0))};
+    for (std::size_t i = 1; i < bf.order.size(); ++i) {
         const BuildNode& node = nodes[bf.order[i]];
         const std::size_t d = depthOf[i];
         storage::NodeRecord r = toRecord(node);
@@ -341,7 +231,7 @@ LevelledSubtree encodeLevels(
             out.levels[d + 1].blocks.push_back(static_cast<std::uint8_t>(node.childCount));
         }
         if (node.triangleCount > 0) {
-            r.geometryFirst = static_cast<std::uint32_t>(localTriangle(i, node));
+            r.geometryFirst = static_cast<std::uint32_t>(localTriangle(i));
             r.geometryCount = static_cast<std::uint32_t>(node.triangleCount);
         }
         out.levels[d].records.push_back(r);
@@ -349,15 +239,6 @@ LevelledSubtree encodeLevels(
     }
     for (const BuildNode& node : nodes)
         out.maxLevel = std::max<std::uint32_t>(out.maxLevel, node.level);
-
-    out.crown = takeCrown(
-            nodes, bf, crown, split,
-            [&](std::uint32_t firstChild) {
-                return storage::NodeRef{0, position[firstChild] - static_cast<std::uint32_t>(bf.levelEnd[crown.lowestDepth])};
-            },
-            [&](std::size_t i, const BuildNode& node) {
-                return TriangleSlot{0, static_cast<std::uint32_t>(localTriangle(i, node))};
-            });
     out.triangles = std::move(triangles);
     return out;
 }

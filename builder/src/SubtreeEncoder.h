@@ -47,21 +47,12 @@ EncodedSubtree encodeSubtree(
         std::uint32_t pageSize);
 
 /**
- * How much of a chunk may be held back as its crown, the top levels laid out with the tree
- * above the chunks: at most `nodes` records (whole levels, the root always) and `triangles`
- * of their triangles.
- */
-struct CrownBudget {
-    std::uint64_t nodes = 0;
-    std::uint64_t triangles = 0;
-};
-
-/**
- * A chunk below its crown, level by level and not yet placed, for a layout that puts each level
- * of many chunks together (LevelRegions). References are local until LevelRegions places the
- * chunk: a record's firstChild is {0, index of the first child in the next level's records}, a
- * Cell record's geometry is {geometryPage 0, geometryFirst = where its run starts in its level's
- * triangles}; a crown node's placedChildren and placedTriangles follow the same rule.
+ * A chunk, level by level and not yet placed, for a layout that puts each level of many chunks
+ * together (LevelRegions). Its root is kept back for the tree above the chunks. References are
+ * local until LevelRegions places the chunk: a record's firstChild is {0, index of the first
+ * child in the next level's records}, a Cell record's geometry is {geometryPage 0,
+ * geometryFirst = where its run starts in its level's triangles}; the root's placedChildren and
+ * placedTriangles follow the same rule.
  */
 struct LevelledSubtree {
     struct Level {
@@ -70,31 +61,24 @@ struct LevelledSubtree {
         std::uint64_t triangleBegin = 0;          ///< the level's range of `triangles`
         std::uint64_t triangleCount = 0;
     };
-    std::uint32_t rootLevel = 0;                         ///< octree level of levels[0]
-    std::vector<Level> levels;                           ///< levels[d]: level rootLevel + d
-    std::vector<storage::PackedTriangle> triangles;      ///< breadth-first, so level by level
-    /** The root and whole levels below it, in breadth-first order, children contiguous: a
-     *  node's children are in the crown (firstChild) or placed (placedChildren), its triangles
-     *  in crownTriangles (firstTriangle) or, beyond the budget, placed (placedTriangles). */
-    std::vector<BuildNode> crown;
-    std::vector<storage::PackedTriangle> crownTriangles;
-    std::uint64_t nodeCount = 0;                         ///< records in levels
-    std::uint32_t maxLevel = 0;                          ///< deepest level, crown included
+    std::uint32_t rootLevel = 0;                    ///< octree level of levels[0]
+    std::vector<Level> levels;                      ///< levels[d]: level rootLevel + d (levels[0]: no records)
+    std::vector<storage::PackedTriangle> triangles; ///< breadth-first, so level by level
+    /** The root: its children (placedChildren) and its triangles (placedTriangles) are in the
+     *  levels, its record is written with the tree above the chunks. */
+    BuildNode root;
+    std::uint64_t nodeCount = 0; ///< records in levels (the root not included)
+    std::uint32_t maxLevel = 0;  ///< deepest level
 };
 
 /**
- * Splits a chunk into its crown (the root and as many whole levels below it as fit the
- * budget's nodes; the crown's triangles, breadth-first, while they fit the budget's triangles)
- * and the rest, level by level: the records below the crown and the triangles not in
- * crownTriangles, each level's in breadth-first order (encodeSubtree()'s order). The chunk
- * must be below 2^32 triangles. Takes ownership of the triangles.
+ * Splits a chunk into its root and the records below it, level by level, each level's records
+ * and triangles in breadth-first order (encodeSubtree()'s order). The chunk must be below 2^32
+ * triangles. Takes ownership of the triangles.
  */
-LevelledSubtree encodeLevels(
-        std::vector<BuildNode> nodes,
-        std::vector<storage::PackedTriangle> triangles,
-        CrownBudget crownBudget);
+LevelledSubtree encodeLevels(std::vector<BuildNode> nodes, std::vector<storage::PackedTriangle> triangles);
 
-/** Writes the subtree's pages and makes its page numbers (the crown's too) final. */
+/** Writes the subtree's pages and makes its page numbers final. */
 [[nodiscard]] Status commitSubtree(storage::SceneWriter& writer, EncodedSubtree& subtree);
 
 } // namespace ff::builder

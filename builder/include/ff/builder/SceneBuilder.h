@@ -37,7 +37,8 @@ namespace ff::builder {
 
 /** Progress of a long phase, for a terminal progress bar. Called on the building thread. */
 struct BuildProgress {
-    std::string phase; ///< "scan", "partition", "hierarchy", "instances", "write"
+    std::string phase; ///< "scan", then "hierarchy" and, within a chunked prototype, "count",
+                       ///< "partition", "chunks", "layout"; then "instances", "write"
     std::uint64_t done = 0;
     std::uint64_t total = 0; ///< 0 = unknown
 };
