@@ -271,9 +271,12 @@ Result<PrototypeBuildResult> PrototypeBuilder::buildChunked(
         chunkFiles.emplace_back(mTempDirectory / ("proto" + std::to_string(prototypeId) + "-chunk" + std::to_string(c) + ".run"));
         chunkFiles.back().setBufferLimit(bufferBytes);
     }
+    // The run file is consumed: its space comes back behind the reader, so the triangles need
+    // the disk once while they move to the chunk files, not twice.
     std::uint64_t topTriangles = 0;
     std::uint64_t distributed = 0;
-    FF_RETURN_IF_ERROR(triangles.forEachBatch(1u << 15, [&](std::span<const storage::PackedTriangle> batch) -> Status {
+    std::uint64_t released = 0;
+    FF_RETURN_IF_ERROR(triangles.consumeBatches(1u << 15, [&](std::span<const storage::PackedTriangle> batch) -> Status {
         distributed += batch.size();
         report("partition", distributed, triangleCount);
         for (const storage::PackedTriangle& t : batch) {
@@ -306,8 +309,7 @@ Result<PrototypeBuildResult> PrototypeBuilder::buildChunked(
             }
         }
         return Status::ok();
-    }));
-    triangles.remove(); // its bytes were counted by the caller
+    }, released)); // the run file is gone now; its bytes were counted by the caller
     for (RunFile& file : chunkFiles) {
         FF_RETURN_IF_ERROR(file.flush());
         spillBytes += file.bytesWritten();

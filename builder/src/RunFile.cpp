@@ -107,12 +107,45 @@ template <class Item>
 Status SpillFile<Item>::forEachBatch(
         std::size_t batchSize,
         const std::function<Status(std::span<const Item>)>& visit) {
+    return readBatches(batchSize, O_RDONLY, visit, {});
+}
+
+template <class Item>
+Status SpillFile<Item>::consumeBatches(
+        std::size_t batchSize,
+        const std::function<Status(std::span<const Item>)>& visit,
+        std::uint64_t& released) {
+    released = 0;
+    bool punching = true;
+    // Whole blocks only: a partial one keeps its data anyway.
+    constexpr std::uint64_t kBlock = 1u << 20;
+    const Status status = readBatches(batchSize, O_RDWR, visit, [&](int fd, std::uint64_t bytesRead) {
+        const std::uint64_t end = bytesRead / kBlock * kBlock;
+        if (!punching || end <= released)
+            return;
+        if (::fallocate(fd, FALLOC_FL_PUNCH_HOLE | FALLOC_FL_KEEP_SIZE, static_cast<off_t>(released),
+                        static_cast<off_t>(end - released)) == 0)
+            released = end;
+        else
+            punching = false; // not supported here (or failing): the space comes back at remove()
+    });
+    remove();
+    return status;
+}
+
+template <class Item>
+Status SpillFile<Item>::readBatches(
+        std::size_t batchSize,
+        int openFlags,
+        const std::function<Status(std::span<const Item>)>& visit,
+        const std::function<void(int fd, std::uint64_t bytesRead)>& afterBatch) {
     FF_RETURN_IF_ERROR(flush());
-    FileDescriptor fd(::open(mPath.c_str(), O_RDONLY | O_CLOEXEC));
+    FileDescriptor fd(::open(mPath.c_str(), openFlags | O_CLOEXEC));
     if (fd.get() < 0)
         return ioStatus(errno, "cannot open spill file", mPath);
     std::vector<Item> batch(std::max<std::size_t>(batchSize, 1));
     std::uint64_t remaining = mCount;
+    std::uint64_t bytesRead = 0;
     while (remaining > 0) {
         const std::size_t want = static_cast<std::size_t>(std::min<std::uint64_t>(remaining, batch.size()));
         auto* out = reinterpret_cast<char*>(batch.data());
@@ -130,6 +163,9 @@ Status SpillFile<Item>::forEachBatch(
         }
         FF_RETURN_IF_ERROR(visit(std::span(batch.data(), want)));
         remaining -= want;
+        bytesRead += want * sizeof(Item);
+        if (afterBatch)
+            afterBatch(fd.get(), bytesRead);
     }
     return Status::ok();
 }

@@ -44,6 +44,18 @@ public:
             std::size_t batchSize,
             const std::function<Status(std::span<const Item>)>& visit);
 
+    /**
+     * Like forEachBatch(), but gives the disk space of what was visited back as it goes (a
+     * hole punched behind the reader, where the file system can) and removes the file at the
+     * end, whatever the outcome: a pass that moves the items elsewhere then needs their space
+     * once, not twice. Returns the bytes given back early in `released` (0 where holes are not
+     * supported).
+     */
+    [[nodiscard]] Status consumeBatches(
+            std::size_t batchSize,
+            const std::function<Status(std::span<const Item>)>& visit,
+            std::uint64_t& released);
+
     /** Flushes, then reads the whole file. */
     [[nodiscard]] Result<std::vector<Item>> readAll();
 
@@ -53,6 +65,12 @@ public:
 private:
     /** Writes the buffer, then `more`, and empties the buffer. */
     [[nodiscard]] Status writeOut(std::span<const Item> more);
+    /** forEachBatch() and consumeBatches(): `afterBatch` gets the descriptor and the bytes read. */
+    [[nodiscard]] Status readBatches(
+            std::size_t batchSize,
+            int openFlags,
+            const std::function<Status(std::span<const Item>)>& visit,
+            const std::function<void(int fd, std::uint64_t bytesRead)>& afterBatch);
 
     std::filesystem::path mPath;
     std::vector<Item> mBuffer;
