@@ -117,7 +117,7 @@ Status SpillFile<Item>::consumeBatches(
         std::uint64_t& released) {
     released = 0;
     bool punching = true;
-    // Whole blocks only: a partial one keeps its data anyway.
+    // In whole MiB: few calls, and a partly read file-system block must keep its data anyway.
     constexpr std::uint64_t kBlock = 1u << 20;
     const Status status = readBatches(batchSize, O_RDWR, visit, [&](int fd, std::uint64_t bytesRead) {
         const std::uint64_t end = bytesRead / kBlock * kBlock;
