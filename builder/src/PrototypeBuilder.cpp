@@ -3,6 +3,8 @@
 #include "LevelRegions.h"
 #include "SubtreeEncoder.h"
 
+#include <ff/storage/Assert.h>
+
 #include <algorithm>
 #include <cmath>
 #include <future>
@@ -16,11 +18,7 @@ namespace {
 
 struct ChunkOutput {
     LevelledSubtree encoded;
-    ColorCube rootCube;
-    glm::vec3 boundsMin{0.0f};
-    glm::vec3 boundsMax{0.0f};
     PrototypeSummary summary;
-    std::uint64_t nodes = 0;
 };
 
 /** A cell above the chunks of a partitioned prototype. */
@@ -71,10 +69,7 @@ void addToSummary(const BuildNode& node, PrototypeSummary& summary) {
 
 /** An octree as built, before its layout: what the tree above it and the report need. */
 struct BuiltOctree {
-    std::vector<BuildNode> nodes;
-    ColorCube rootCube;
-    glm::vec3 boundsMin{0.0f};
-    glm::vec3 boundsMax{0.0f};
+    std::vector<BuildNode> nodes; ///< nodes[0] is the root
     PrototypeSummary summary;
 };
 
@@ -84,9 +79,6 @@ BuiltOctree buildInMemoryOctree(
     CubeBaker baker(params.bakeResolution);
     BuiltOctree out;
     out.nodes = buildOctree(triangles, cell, level, octant, params, baker);
-    out.rootCube = out.nodes[0].cube;
-    out.boundsMin = out.nodes[0].boundsMin;
-    out.boundsMax = out.nodes[0].boundsMax;
     for (const BuildNode& node : out.nodes)
         addToSummary(node, out.summary);
     return out;
@@ -101,11 +93,7 @@ ChunkOutput buildChunk(
         const HierarchyParams& params) {
     BuiltOctree octree = buildInMemoryOctree(triangles, cell, level, octant, params);
     ChunkOutput out;
-    out.rootCube = octree.rootCube;
-    out.boundsMin = octree.boundsMin;
-    out.boundsMax = octree.boundsMax;
     out.summary = std::move(octree.summary);
-    out.nodes = octree.nodes.size();
     out.encoded = encodeLevels(std::move(octree.nodes), std::move(triangles));
     return out;
 }
@@ -162,6 +150,8 @@ Result<PrototypeBuildResult> PrototypeBuilder::buildInMemory(RunFile& triangles,
     FF_ASSIGN_OR_RETURN(std::vector<storage::PackedTriangle> all, triangles.readAll());
     triangles.remove();
     BuiltOctree octree = buildInMemoryOctree(all, root, 0, 0, mParams);
+    const glm::vec3 boundsMin = octree.nodes[0].boundsMin;
+    const glm::vec3 boundsMax = octree.nodes[0].boundsMax;
     PrototypeBuildResult result;
     result.nodes = octree.nodes.size();
     EncodedSubtree encoded = encodeSubtree(std::move(octree.nodes), std::move(all), mWriter.pageSize());
@@ -169,8 +159,8 @@ Result<PrototypeBuildResult> PrototypeBuilder::buildInMemory(RunFile& triangles,
     result.nodePages = encoded.nodePages.size();
     FF_RETURN_IF_ERROR(commitSubtree(mWriter, encoded));
     result.record.root = encoded.rootRef;
-    result.record.boundsMin = {octree.boundsMin.x, octree.boundsMin.y, octree.boundsMin.z};
-    result.record.boundsMax = {octree.boundsMax.x, octree.boundsMax.y, octree.boundsMax.z};
+    result.record.boundsMin = {boundsMin.x, boundsMin.y, boundsMin.z};
+    result.record.boundsMax = {boundsMax.x, boundsMax.y, boundsMax.z};
     result.record.nodeCount = result.nodes;
     result.summary = std::move(octree.summary);
     result.maxDepth = encoded.maxLevel;
@@ -325,7 +315,7 @@ Result<PrototypeBuildResult> PrototypeBuilder::buildChunked(
     PrototypeBuildResult result;
     result.chunks = chunkNodes.size();
     LevelRegions levels(mWriter, mTempDirectory, "proto" + std::to_string(prototypeId), mLevelExtentBytes);
-    std::vector<ChunkOutput> finished(chunkNodes.size());
+    std::vector<BuildNode> chunkRoots(chunkNodes.size()); // for the top tree
     for (std::size_t begin = 0; begin < chunkNodes.size(); begin += mThreads) {
         const std::size_t end = std::min<std::size_t>(begin + mThreads, chunkNodes.size());
         std::vector<std::future<Result<ChunkOutput>>> running;
@@ -347,14 +337,13 @@ Result<PrototypeBuildResult> PrototypeBuilder::buildChunked(
             if (!chunk)
                 return chunk.status();
             FF_RETURN_IF_ERROR(levels.append(chunk->encoded));
-            result.nodes += chunk->nodes;
+            result.nodes += chunk->encoded.nodeCount + 1; // and its root
             result.maxDepth = std::max(result.maxDepth, chunk->encoded.maxLevel);
             for (std::size_t l = 0; l < chunk->summary.cuts.size(); ++l) {
                 auto& cut = result.summary.cuts[l];
                 cut.insert(cut.end(), chunk->summary.cuts[l].begin(), chunk->summary.cuts[l].end());
             }
-            chunk->summary = {};
-            finished[c] = std::move(chunk.value());
+            chunkRoots[c] = std::move(chunk->encoded.root);
             report("chunks", c + 1, chunkNodes.size());
         }
     }
@@ -370,6 +359,15 @@ Result<PrototypeBuildResult> PrototypeBuilder::buildChunked(
     for (std::size_t i = 0; i < top.size(); ++i) {
         TopNode& t = top[i];
         BuildNode& n = nodes[i];
+        if (t.chunk >= 0) { // the chunk's root; its children and triangles are in the levels
+            FF_ASSERT(t.own.empty()); // a chunk takes every triangle that reaches it
+            n = std::move(chunkRoots[static_cast<std::size_t>(t.chunk)]);
+            if (n.placedChildren)
+                n.placedChildren = levels.absoluteChildren(n.level + 1u, *n.placedChildren);
+            if (n.placedTriangles)
+                n.placedTriangles = levels.absoluteTriangles(n.level, *n.placedTriangles);
+            continue;
+        }
         n.cellMin = t.cell.min;
         n.cellMax = t.cell.max();
         n.level = static_cast<std::uint8_t>(t.level);
@@ -381,12 +379,6 @@ Result<PrototypeBuildResult> PrototypeBuilder::buildChunked(
         n.triangleCount = t.own.size();
         ownTriangles.insert(ownTriangles.end(), t.own.begin(), t.own.end());
         t.own = {};
-        if (t.chunk >= 0) { // stands for the chunk's root until it is put in below
-            const ChunkOutput& chunk = finished[static_cast<std::size_t>(t.chunk)];
-            n.cube = chunk.rootCube;
-            n.boundsMin = chunk.boundsMin;
-            n.boundsMax = chunk.boundsMax;
-        }
     }
     // Children come after their parents in `top`, so a reverse sweep is a post-order.
     CubeBaker baker(mParams.bakeResolution);
@@ -416,18 +408,6 @@ Result<PrototypeBuildResult> PrototypeBuilder::buildChunked(
             addToSummary(nodes[i], result.summary);
     const glm::vec3 boundsMin = nodes[0].boundsMin;
     const glm::vec3 boundsMax = nodes[0].boundsMax;
-
-    // Each chunk's root replaces the chunk's cell; its children and triangles are in the levels.
-    for (std::size_t i = 0; i < top.size(); ++i) {
-        if (top[i].chunk < 0)
-            continue;
-        BuildNode chunkRoot = std::move(finished[static_cast<std::size_t>(top[i].chunk)].encoded.root);
-        if (chunkRoot.placedChildren)
-            chunkRoot.placedChildren = levels.absoluteChildren(chunkRoot.level + 1u, *chunkRoot.placedChildren);
-        if (chunkRoot.placedTriangles)
-            chunkRoot.placedTriangles = levels.absoluteTriangles(chunkRoot.level, *chunkRoot.placedTriangles);
-        nodes[i] = std::move(chunkRoot);
-    }
     EncodedSubtree encoded = encodeSubtree(std::move(nodes), std::move(ownTriangles), mWriter.pageSize());
     result.geometryPages += encoded.geometryPageCount(mWriter.pageSize());
     result.nodePages += encoded.nodePages.size();

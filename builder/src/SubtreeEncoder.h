@@ -7,7 +7,6 @@
 #include <ff/storage/Status.h>
 
 #include <cstdint>
-#include <optional>
 #include <vector>
 
 namespace ff::builder {
