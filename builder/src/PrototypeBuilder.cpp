@@ -265,7 +265,6 @@ Result<PrototypeBuildResult> PrototypeBuilder::buildChunked(
     // the disk once while they move to the chunk files, not twice.
     std::uint64_t topTriangles = 0;
     std::uint64_t distributed = 0;
-    std::uint64_t released = 0;
     FF_RETURN_IF_ERROR(triangles.consumeBatches(1u << 15, [&](std::span<const storage::PackedTriangle> batch) -> Status {
         distributed += batch.size();
         report("partition", distributed, triangleCount);
@@ -299,7 +298,7 @@ Result<PrototypeBuildResult> PrototypeBuilder::buildChunked(
             }
         }
         return Status::ok();
-    }, released)); // the run file is gone now; its bytes were counted by the caller
+    }).status()); // the run file is gone now; its bytes were counted by the caller
     for (RunFile& file : chunkFiles) {
         FF_RETURN_IF_ERROR(file.flush());
         spillBytes += file.bytesWritten();

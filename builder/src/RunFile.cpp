@@ -111,11 +111,10 @@ Status SpillFile<Item>::forEachBatch(
 }
 
 template <class Item>
-Status SpillFile<Item>::consumeBatches(
+Result<std::uint64_t> SpillFile<Item>::consumeBatches(
         std::size_t batchSize,
-        const std::function<Status(std::span<const Item>)>& visit,
-        std::uint64_t& released) {
-    released = 0;
+        const std::function<Status(std::span<const Item>)>& visit) {
+    std::uint64_t released = 0;
     bool punching = true;
     // In whole MiB: few calls, and a partly read file-system block must keep its data anyway.
     constexpr std::uint64_t kBlock = 1u << 20;
@@ -130,7 +129,9 @@ Status SpillFile<Item>::consumeBatches(
             punching = false; // not supported here (or failing): the space comes back at remove()
     });
     remove();
-    return status;
+    if (!status.isOk())
+        return status;
+    return released;
 }
 
 template <class Item>

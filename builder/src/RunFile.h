@@ -48,13 +48,12 @@ public:
      * Like forEachBatch(), but gives the disk space of what was visited back as it goes (a
      * hole punched behind the reader, where the file system can) and removes the file at the
      * end, whatever the outcome: a pass that moves the items elsewhere then needs their space
-     * once, not twice. Returns the bytes given back early in `released` (0 where holes are not
+     * once, not twice. Returns the bytes given back before the end (0 where holes are not
      * supported).
      */
-    [[nodiscard]] Status consumeBatches(
+    [[nodiscard]] Result<std::uint64_t> consumeBatches(
             std::size_t batchSize,
-            const std::function<Status(std::span<const Item>)>& visit,
-            std::uint64_t& released);
+            const std::function<Status(std::span<const Item>)>& visit);
 
     /** Flushes, then reads the whole file. */
     [[nodiscard]] Result<std::vector<Item>> readAll();

@@ -56,8 +56,7 @@ TEST(SpillFileTest, ConsumingTheFileGivesItsSpaceBackAsItGoes) {
 
     std::uint32_t next = 0;
     std::uint64_t allocatedNearTheEnd = 0;
-    std::uint64_t released = 0;
-    const Status status = file.consumeBatches(
+    const Result<std::uint64_t> released = file.consumeBatches(
             (1u << 20) / sizeof(storage::NodeRecord),
             [&](std::span<const storage::NodeRecord> batch) {
                 for (const storage::NodeRecord& r : batch)
@@ -65,11 +64,10 @@ TEST(SpillFileTest, ConsumingTheFileGivesItsSpaceBackAsItGoes) {
                 if (next == kRecords) // by the last batch, all but the last ~2 MiB is given back
                     allocatedNearTheEnd = allocatedBytes(file.path());
                 return Status::ok();
-            },
-            released);
-    ASSERT_TRUE(status.isOk()) << status.toString();
+            });
+    ASSERT_TRUE(released.isOk()) << released.status().toString();
     EXPECT_EQ(next, kRecords);
-    EXPECT_GE(released, size - (2u << 20));
+    EXPECT_GE(*released, size - (2u << 20));
     EXPECT_LE(allocatedNearTheEnd, 3u << 20) << "of " << size << " bytes";
     EXPECT_FALSE(fs::exists(file.path()));
     EXPECT_EQ(file.count(), 0u);
