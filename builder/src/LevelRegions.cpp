@@ -51,16 +51,16 @@ Result<TriangleSlot> LevelRegions::placeRun(Region& r, std::span<const storage::
     const std::uint64_t perPage = storage::trianglesPerPage(mPageSize);
     const std::uint64_t at = r.extent.size();
     r.extent.insert(r.extent.end(), run.begin(), run.end());
-    return TriangleSlot{r.extentFirstPage + static_cast<std::uint32_t>(at / perPage), static_cast<std::uint32_t>(at % perPage)};
+    return TriangleSlot{
+            r.extentFirstPage + static_cast<std::uint32_t>(at / perPage), static_cast<std::uint32_t>(at % perPage)};
 }
 
 Status LevelRegions::writeExtent(Region& r) {
     const std::uint64_t perPage = storage::trianglesPerPage(mPageSize);
     for (std::uint64_t first = 0; first < r.extent.size(); first += perPage) {
         const std::uint64_t count = std::min<std::uint64_t>(perPage, r.extent.size() - first);
-        FF_ASSIGN_OR_RETURN(
-                const std::uint64_t page,
-                mWriter.appendPage(storage::PageType::Geometry, std::as_bytes(std::span(r.extent).subspan(first, count))));
+        const auto payload = std::as_bytes(std::span(r.extent).subspan(first, count));
+        FF_ASSIGN_OR_RETURN(const std::uint64_t page, mWriter.appendPage(storage::PageType::Geometry, payload));
         if (page > 0xFFFFFFFFull)
             return Status(ErrorCode::Unsupported, "scene needs more than 2^32 pages; use a larger --page-size");
         r.geometryPage.push_back(static_cast<std::uint32_t>(page));
@@ -93,14 +93,16 @@ Status LevelRegions::append(LevelledSubtree& chunk) {
         LevelledSubtree::Level& level = chunk.levels[d];
         const auto triangles = std::span(chunk.triangles).subspan(level.triangleBegin, level.triangleCount);
         if (d == 0 && root.placedTriangles) {
-            FF_ASSIGN_OR_RETURN(root.placedTriangles, placeRun(r, triangles.subspan(root.placedTriangles->slot, root.triangleCount)));
+            const auto run = triangles.subspan(root.placedTriangles->slot, root.triangleCount);
+            FF_ASSIGN_OR_RETURN(root.placedTriangles, placeRun(r, run));
         }
         for (storage::NodeRecord& record : level.records) {
             FF_ASSERT(record.kind == static_cast<std::uint8_t>(storage::NodeKind::Cell));
             if (record.childCount > 0)
                 record.firstChild = where.at(d + 1).at(record.firstChild.slot);
             if (record.geometryCount > 0) {
-                FF_ASSIGN_OR_RETURN(const TriangleSlot start, placeRun(r, triangles.subspan(record.geometryFirst, record.geometryCount)));
+                const auto run = triangles.subspan(record.geometryFirst, record.geometryCount);
+                FF_ASSIGN_OR_RETURN(const TriangleSlot start, placeRun(r, run));
                 record.geometryPage = start.page;
                 record.geometryFirst = start.slot;
             }
@@ -148,7 +150,8 @@ Status LevelRegions::copyNodePages(Region& r, const Region* below, const std::fu
     std::vector<storage::NodeRecord> pending; // records read but not yet written, < 2 pages
     std::vector<std::byte> payload;
     std::size_t page = 0;
-    FF_RETURN_IF_ERROR(r.records.forEachBatch(storage::nodesPerPage(mPageSize), [&](std::span<const storage::NodeRecord> batch) -> Status {
+    const std::size_t batchSize = storage::nodesPerPage(mPageSize);
+    FF_RETURN_IF_ERROR(r.records.forEachBatch(batchSize, [&](std::span<const storage::NodeRecord> batch) -> Status {
         pending.insert(pending.end(), batch.begin(), batch.end());
         std::size_t used = 0;
         while (page < r.pageFill.size() && pending.size() - used >= r.pageFill[page]) {

@@ -36,7 +36,10 @@ class LevelRegions {
 public:
     /** Record spill files go to `directory`, named after `prefix`. */
     LevelRegions(
-            storage::SceneWriter& writer, std::filesystem::path directory, std::string prefix, std::uint64_t extentBytes);
+            storage::SceneWriter& writer,
+            std::filesystem::path directory,
+            std::string prefix,
+            std::uint64_t extentBytes);
 
     /**
      * Places the chunk after the chunks appended before it, level by level: spills its records,

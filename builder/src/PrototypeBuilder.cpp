@@ -75,7 +75,11 @@ struct BuiltOctree {
 
 // Builds one octree completely in memory. Runs on worker threads: touches only its arguments.
 BuiltOctree buildInMemoryOctree(
-        std::vector<storage::PackedTriangle>& triangles, const Cell& cell, int level, int octant, const HierarchyParams& params) {
+        std::vector<storage::PackedTriangle>& triangles,
+        const Cell& cell,
+        int level,
+        int octant,
+        const HierarchyParams& params) {
     CubeBaker baker(params.bakeResolution);
     BuiltOctree out;
     out.nodes = buildOctree(triangles, cell, level, octant, params, baker);
@@ -346,7 +350,9 @@ Result<PrototypeBuildResult> PrototypeBuilder::buildChunked(
             report("chunks", c + 1, chunkNodes.size());
         }
     }
-    FF_RETURN_IF_ERROR(levels.finish([this](std::uint64_t done, std::uint64_t total) { report("layout", done, total); }));
+    FF_RETURN_IF_ERROR(levels.finish([this](std::uint64_t done, std::uint64_t total) {
+        report("layout", done, total);
+    }));
     result.geometryPages += levels.geometryPages();
     result.nodePages += levels.nodePages();
     spillBytes += levels.spillBytes();

@@ -218,7 +218,8 @@ LevelledSubtree encodeLevels(std::vector<BuildNode> nodes, std::vector<storage::
     out.root = nodes[0];
     if (out.root.childCount > 0) {
         out.levels[1].blocks.push_back(static_cast<std::uint8_t>(out.root.childCount));
-        out.root.placedChildren = storage::NodeRef{0, position[out.root.firstChild] - static_cast<std::uint32_t>(bf.levelEnd[0])};
+        const auto first = position[out.root.firstChild] - static_cast<std::uint32_t>(bf.levelEnd[0]);
+        out.root.placedChildren = storage::NodeRef{0, first};
     }
     if (out.root.triangleCount > 0)
         out.root.placedTriangles = TriangleSlot{0, static_cast<std::uint32_t>(localTriangle(0))};

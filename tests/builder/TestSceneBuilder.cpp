@@ -721,7 +721,9 @@ TEST(SceneBuilderTest, ChunkedPrototypeReportsProgressOfEachPhase) {
 
     for (const std::string phase : {"count", "partition", "chunks", "layout"}) {
         std::vector<BuildProgress> seen;
-        std::copy_if(events.begin(), events.end(), std::back_inserter(seen), [&](const BuildProgress& p) { return p.phase == phase; });
+        std::copy_if(events.begin(), events.end(), std::back_inserter(seen), [&](const BuildProgress& p) {
+            return p.phase == phase;
+        });
         ASSERT_FALSE(seen.empty()) << phase;
         for (std::size_t i = 0; i < seen.size(); ++i) {
             EXPECT_EQ(seen[i].total, seen.back().total) << phase;
@@ -733,7 +735,8 @@ TEST(SceneBuilderTest, ChunkedPrototypeReportsProgressOfEachPhase) {
         EXPECT_EQ(seen.back().done, seen.back().total) << phase;
     }
     const auto last = [&](const std::string& phase) {
-        return std::find_if(events.rbegin(), events.rend(), [&](const BuildProgress& p) { return p.phase == phase; })->total;
+        const auto it = std::find_if(events.rbegin(), events.rend(), [&](const BuildProgress& p) { return p.phase == phase; });
+        return it->total;
     };
     EXPECT_EQ(last("count"), scene.storedTriangles());
     EXPECT_EQ(last("partition"), scene.storedTriangles());
@@ -767,10 +770,11 @@ void walkLevels(const storage::SceneFile& file, storage::NodeRef root, std::vect
 // Written each on its own, every chunk a coarse cut enters would cost fresh pages, however few
 // of its records the cut needs: a cost that grows with the number of chunks, that is with the
 // scene (docs/results/paging.md). The builder writes each chunk's root with the cells above the
-// chunks and its levels below across all chunks. So walking the prototype breadth-first, the levels down to one
-// below the chunk roots (about 5 records per chunk for a terrain, 6 with the cells above) fill
-// their pages as if it had been built in one piece: a page per nodesPerPage - 7 records (a
-// sibling block of up to 8 that does not fit starts a page), plus one for the root.
+// chunks, and the levels below across all chunks. So walking the prototype breadth-first, the
+// levels down to one below the chunk roots (about 5 records per chunk for a terrain, 6 with the
+// cells above) fill their pages as if it had been built in one piece: a page per
+// nodesPerPage - 7 records (a sibling block of up to 8 that does not fit starts a page), plus
+// one for the root.
 TEST(SceneBuilderTest, ChunksTopLevelsSharePagesWithTheCellsAboveThem) {
     const fs::path dir = freshTestDir();
     constexpr unsigned kThreads = 4;
@@ -843,7 +847,8 @@ TEST(SceneBuilderTest, ChunkedPrototypeFillsPagesLevelByLevelAcrossChunks) {
         const std::uint64_t extents = (triangles + extentTriangles - longestRun - 1) / (extentTriangles - longestRun);
         const std::uint64_t slots = triangles + extents * longestRun;
         EXPECT_LE(geometryPages.size(), (slots + trianglesPerPage - 1) / trianglesPerPage + 2)
-                << triangles << " triangles at depth " << depth << " in " << extents << " extents, " << report.chunks << " chunks";
+                << triangles << " triangles at depth " << depth << " in " << extents << " extents, " << report.chunks
+                << " chunks";
     }
 }
 

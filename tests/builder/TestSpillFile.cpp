@@ -98,7 +98,9 @@ TEST(SpillFileTest, BufferedAndWrittenThroughAppendsReadBackInOrder) {
                         return Status::ok();
                     }).isOk());
     std::vector<std::uint32_t> want(expected.size());
-    std::transform(expected.begin(), expected.end(), want.begin(), [](const storage::NodeRecord& r) { return r.geometryCount; });
+    std::transform(expected.begin(), expected.end(), want.begin(), [](const storage::NodeRecord& r) {
+        return r.geometryCount;
+    });
     EXPECT_EQ(read, want);
     EXPECT_EQ(file.bytesWritten(), expected.size() * sizeof(storage::NodeRecord));
     EXPECT_EQ(fs::file_size(dir / "level.nodes"), expected.size() * sizeof(storage::NodeRecord));
