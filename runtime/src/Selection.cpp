@@ -73,8 +73,7 @@ std::uint32_t Selection::pushTransform(const glm::mat4& transform) {
     const auto index = static_cast<std::uint32_t>(mOut->transforms.size());
     mOut->transforms.push_back(transform);
     mOut->localEyes.push_back(glm::vec3(glm::inverse(transform) * glm::vec4(mCamera->eye, 1.0f)));
-    mTransformScale.push_back(std::max({glm::length(glm::vec3(transform[0])), glm::length(glm::vec3(transform[1])),
-                                        glm::length(glm::vec3(transform[2]))}));
+    mMetrics.emplace_back(transform);
     const float aspect = mOptions.viewportWidth / std::max(mOptions.viewportHeight, 1.0f);
     mFrusta.emplace_back(mCamera->projection(aspect) * mCamera->view() * transform);
     return index;
@@ -138,7 +137,7 @@ Status Selection::select(const Camera& camera, const SelectionOptions& options, 
     mPixelScale = camera.pixelScale(options.viewportHeight);
     mNewFailures.clear();
     out.clear();
-    mTransformScale.clear();
+    mMetrics.clear();
     mFrusta.clear();
     mChildStack.clear();
     pushTransform(glm::mat4(1.0f));
@@ -178,18 +177,15 @@ void Selection::visit(const storage::NodeRecord& node, storage::NodeRef ref, std
     // ε rule (Chamberlain et al. '96, §3: a cube is drawn where its "projected screen image is no
     // larger than a pixel"): the area the cell's box covers on screen, seen from the eye's
     // direction at the cell's nearest point, below ε² pixels. The area is a box's silhouette
-    // (each face's area times |cos| to the eye), the same measure the point shader draws with.
+    // (each face's area times |cos| to the eye), the same measure the point shader draws with,
+    // and both it and the distance are taken in world units through the whole transform: an
+    // instance may scale its axes differently, mirror or shear.
     const glm::vec3 cellMin = toVec3(node.cellMin);
     const glm::vec3 cellMax = toVec3(node.cellMax);
     const glm::vec3& localEye = mOut->localEyes[transform];
-    const float scale = mTransformScale[transform];
-    const glm::vec3 extent = cellMax - cellMin;
-    const glm::vec3 toEye = localEye - 0.5f * (cellMin + cellMax);
-    const float eyeDistance = glm::length(toEye);
-    const glm::vec3 direction = eyeDistance > 0.0f ? glm::abs(toEye) / eyeDistance : glm::vec3(0.0f);
-    const float area = glm::dot(glm::vec3(extent.y * extent.z, extent.z * extent.x, extent.x * extent.y), direction);
-    const float size = std::sqrt(area) * scale; // the side of a square of that area
-    const float nearest = glm::length(glm::max(glm::max(cellMin - localEye, localEye - cellMax), 0.0f)) * scale;
+    const TransformMetric& metric = mMetrics[transform];
+    const float size = std::sqrt(metric.projectedArea(cellMin, cellMax, localEye)); // a square's side
+    const float nearest = metric.nearestDistance(cellMin, cellMax, localEye);
     float projected = INFINITY;
     if (mCamera->orthographic)
         projected = size * mPixelScale;
@@ -230,7 +226,8 @@ void Selection::visit(const storage::NodeRecord& node, storage::NodeRef ref, std
         mStats->trianglesDrawn += s.count;
     }
 
-    // Children farthest first, so cubes drawn later blend over what lies behind them.
+    // Children farthest first (in world distance), so cubes drawn later blend over what lies
+    // behind them.
     const std::size_t base = mChildStack.size();
     for (std::uint32_t c = 0; c < node.childCount; ++c) {
         const storage::NodeRef childRef = storage::SceneFile::childRef(node, c);
@@ -242,7 +239,7 @@ void Selection::visit(const storage::NodeRecord& node, storage::NodeRef ref, std
             return;
         }
         const glm::vec3 d = 0.5f * (toVec3(child->cellMin) + toVec3(child->cellMax)) - localEye;
-        mChildStack.push_back({*child, childRef, glm::dot(d, d)});
+        mChildStack.push_back({*child, childRef, metric.worldLengthSquared(d)});
     }
     std::sort(mChildStack.begin() + static_cast<std::ptrdiff_t>(base), mChildStack.end(),
               [](const ChildEntry& a, const ChildEntry& b) { return a.distance > b.distance; });

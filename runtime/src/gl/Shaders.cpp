@@ -99,8 +99,13 @@ void main() {
     color /= max(area, 1e-30);
     mat4 model = transforms[aTransform];
     gl_Position = uViewProjection * (model * vec4(center, 1.0));
-    float scale = length(model[0].xyz) * uPixelScale / max(gl_Position.w, 1e-30);
-    float pixels = area * scale * scale;
+    // The projected area in world units through the whole linear part M (axes scaled apart,
+    // mirrored, sheared): a face's area vector a maps to det(M) M^-T a, whose component along the
+    // world direction M t / |M t| is |det M| |a . t| / |M t| (TransformMetric::projectedArea).
+    mat3 linear = mat3(model);
+    float worldArea = abs(determinant(linear)) * area * length(toEye) / max(length(linear * toEye), 1e-30);
+    float scale = uPixelScale / max(gl_Position.w, 1e-30);
+    float pixels = worldArea * scale * scale;
     float size = max(1.0, ceil(sqrt(pixels)));
     gl_PointSize = size;
     vColor = color * min(1.0, pixels / (size * size));

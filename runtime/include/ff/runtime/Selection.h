@@ -5,6 +5,7 @@
 #include <ff/runtime/FrameStats.h>
 #include <ff/runtime/Frustum.h>
 #include <ff/runtime/PageAccess.h>
+#include <ff/runtime/TransformMetric.h>
 #include <ff/storage/SceneFile.h>
 #include <ff/storage/Status.h>
 
@@ -119,7 +120,7 @@ private:
     DrawList* mOut = nullptr;
     FrameStats* mStats = nullptr;
     float mPixelScale = 1.0f;
-    std::vector<float> mTransformScale; ///< largest axis scale of each transform
+    std::vector<TransformMetric> mMetrics; ///< per transform: local sizes to world sizes
     std::vector<Frustum> mFrusta; ///< per transform: the frustum in that local frame
     std::vector<ChildEntry> mChildStack;
     std::vector<storage::GeometrySegment> mSegments;
