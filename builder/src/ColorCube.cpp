@@ -17,7 +17,8 @@ constexpr float kInfinity = std::numeric_limits<float>::infinity();
 
 glm::vec3 shadedVertexColor(const storage::PackedVertex& v) {
     const auto n = storage::decodeOctNormal(v.normalOct);
-    const float light = storage::shadingFactor(n[0], n[1], n[2]);
+    const float light = storage::isUnlitNormal(v.normalOct) ? storage::kUnlitShading
+                                                            : storage::shadingFactor(n[0], n[1], n[2]);
     return glm::vec3(
                    storage::srgb8ToLinear(v.color[0]),
                    storage::srgb8ToLinear(v.color[1]),

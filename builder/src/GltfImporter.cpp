@@ -8,8 +8,9 @@
 // (MetalRoughSpheresNoTextures: 98 meshes over one sphere's accessors, two base colours).
 //
 // Vertex colour (linear RGBA) = material baseColorFactor x COLOR_0 x baseColorTexture sampled
-// bilinearly at the vertex's TEXCOORD_<texCoord>, with the texture's sampler wrap modes and its
-// sRGB texels decoded to linear before filtering. A primitive without material, or a material
+// bilinearly at the vertex's TEXCOORD_<texCoord> (moved by KHR_texture_transform, whose texCoord
+// overrides the reference's), with the texture's sampler wrap modes and its sRGB texels decoded
+// to linear before filtering. KHR_materials_unlit vertices are stored unlit (GltfMaterial.h). A primitive without material, or a material
 // without base colour, is white (glTF's default factor is 1). Normals are passed through in the
 // mesh's own frame (zero when absent, so packTriangle uses the face normal). Skins and morph
 // targets are ignored: meshes are taken in their rest pose, with a warning.
@@ -17,6 +18,7 @@
 #include "GltfAccessors.h"
 #include "GltfDraco.h"
 #include "GltfLoader.h"
+#include "GltfMaterial.h"
 #include "GltfValidation.h"
 #include "TextureSampler.h"
 
@@ -29,7 +31,6 @@
 #include <exception>
 #include <map>
 #include <optional>
-#include <set>
 #include <sstream>
 #include <string>
 #include <utility>
@@ -174,14 +175,9 @@ std::string geometryKey(const tinygltf::Model& model, const tinygltf::Mesh& mesh
                     key << ' ' << name << '#' << (id.IsInt() ? id.Get<int>() : -1);
             }
         }
-        if (primitive.material >= 0) {
-            const auto& pbr = model.materials[static_cast<std::size_t>(primitive.material)]
-                                      .pbrMetallicRoughness;
-            key << " c";
-            for (double c : pbr.baseColorFactor)
-                key << ' ' << c;
-            key << " t" << pbr.baseColorTexture.index << ',' << pbr.baseColorTexture.texCoord;
-        }
+        // Validation has read every material's inputs already (validateGltfModel).
+        if (const auto input = baseColorInput(model, primitive.material))
+            key << ' ' << baseColorKey(*input);
         key << ';';
     }
     return key.str();
@@ -409,9 +405,6 @@ private:
         const tinygltf::TextureInfo& info = m.pbrMetallicRoughness.baseColorTexture;
         if (info.index < 0)
             return nullptr;
-        if (info.extensions.count("KHR_texture_transform") != 0 &&
-            mWarnedTransform.insert(material).second)
-            warn("material " + std::to_string(material) + ": KHR_texture_transform ignored");
         auto [it, inserted] = mTextures.try_emplace(info.index);
         if (!inserted)
             return it->second ? &*it->second : nullptr;
@@ -519,20 +512,9 @@ private:
             PrototypeId prototype, const tinygltf::Primitive& primitive, const std::string& where) {
         if (primitive.attributes.count("POSITION") == 0)
             return Status::ok(); // declaredTriangles() is 0 then; kept for clarity
-        glm::vec4 factor(1.0f);
-        int texCoordSet = -1;
+        FF_ASSIGN_OR_RETURN(const BaseColorInput material, baseColorInput(mModel, primitive.material));
         const TextureSampler* texture = baseColorTexture(primitive.material, where);
-        if (primitive.material >= 0) {
-            const auto& pbr = mModel.materials[static_cast<std::size_t>(primitive.material)]
-                                      .pbrMetallicRoughness;
-            factor = glm::vec4(
-                    static_cast<float>(pbr.baseColorFactor[0]),
-                    static_cast<float>(pbr.baseColorFactor[1]),
-                    static_cast<float>(pbr.baseColorFactor[2]),
-                    static_cast<float>(pbr.baseColorFactor[3]));
-            if (texture != nullptr)
-                texCoordSet = pbr.baseColorTexture.texCoord;
-        }
+        const int texCoordSet = texture != nullptr ? material.texCoord : -1;
         FF_ASSIGN_OR_RETURN(PrimitiveStreams streams, readStreams(primitive, texCoordSet, where));
         if (texture != nullptr && !streams.texcoords) {
             warn(where + ": base colour texture needs TEXCOORD_" + std::to_string(texCoordSet) +
@@ -546,12 +528,13 @@ private:
             v.position = glm::vec3(streams.positions.get(i));
             if (streams.normals)
                 v.normal = glm::vec3(streams.normals->get(i));
-            glm::vec4 color = factor;
+            glm::vec4 color = material.factor;
             if (streams.colors)
                 color *= streams.colors->get(i, glm::vec4(1.0f));
             if (texture != nullptr)
-                color *= texture->sample(glm::vec2(streams.texcoords->get(i)));
+                color *= texture->sample(material.uvTransform.apply(glm::vec2(streams.texcoords->get(i))));
             v.color = color;
+            v.unlit = material.unlit;
         }
 
         // Element k of the primitive is vertex `at(k)`: through the indices, or k itself.
@@ -593,7 +576,6 @@ private:
     std::vector<int> mMeshOrder;
     std::map<int, std::optional<TextureSampler>> mTextures;
     std::map<std::string, PrototypeId> mPrototypeByKey;
-    std::set<int> mWarnedTransform;
     std::vector<storage::PackedTriangle> mBatch;
 };
 

@@ -2,6 +2,7 @@
 
 #include "GltfAccessors.h"
 #include "GltfDraco.h"
+#include "GltfMaterial.h"
 
 #include <array>
 #include <cmath>
@@ -13,8 +14,9 @@ namespace ff::builder {
 
 namespace {
 
-constexpr std::array<std::string_view, 3> kSupportedRequired = {
-        "KHR_draco_mesh_compression", "KHR_mesh_quantization", kInstancingExtension};
+constexpr std::array<std::string_view, 5> kSupportedRequired = {
+        "KHR_draco_mesh_compression", "KHR_mesh_quantization", kInstancingExtension,
+        kTextureTransformExtension, kUnlitExtension};
 
 template <typename T> bool inRange(int index, const std::vector<T>& items) noexcept {
     return index >= 0 && static_cast<std::size_t>(index) < items.size();
@@ -312,6 +314,7 @@ Status checkMaterials(const tinygltf::Model& model) {
                     "baseColorTexture " + std::to_string(texture) + " does not exist");
         if (pbr.baseColorTexture.texCoord < 0)
             return invalid("material", index, "negative texCoord");
+        FF_RETURN_IF_ERROR(baseColorInput(model, index).status());
     }
     for (std::size_t i = 0; i < model.textures.size(); ++i) {
         const tinygltf::Texture& texture = model.textures[i];

@@ -18,7 +18,7 @@ storage::PackedVertex packVertex(const SourceVertex& v, const glm::vec3& fallbac
     const glm::vec3 n = isUsableNormal(v.normal) ? v.normal : fallbackNormal;
     storage::PackedVertex out{};
     out.position = {v.position.x, v.position.y, v.position.z};
-    out.normalOct = storage::encodeOctNormal(n.x, n.y, n.z);
+    out.normalOct = v.unlit ? storage::kUnlitNormalOct : storage::encodeOctNormal(n.x, n.y, n.z);
     out.color = {
             storage::linearToSrgb8(v.color.r),
             storage::linearToSrgb8(v.color.g),

@@ -6,10 +6,13 @@
 // point-drawn cubes once took the transform's x-axis scale as the scale of every length: the
 // blind's slabs (10, 0.004, 1) turned into points 10^4 times too large (13.3 dB against 33.4 dB
 // for faces, issue 13).
+//
+// Unlit materials (KHR_materials_unlit): the base colour as it is, as triangles and as cubes.
 
 #include "FarfieldProcess.h"
 
 #include <ff/runtime/ImageMetrics.h>
+#include <ff/storage/VertexCodec.h>
 
 #include <gtest/gtest.h>
 
@@ -17,6 +20,7 @@
 #include <glm/gtc/matrix_transform.hpp>
 #include <glm/gtc/type_ptr.hpp>
 
+#include <array>
 #include <cmath>
 #include <cstring>
 #include <fstream>
@@ -206,6 +210,55 @@ TEST(CubeDrawTransformTest, PointsMatchFacesUnderNonUniformMirroredShearedAndNes
             }
         }
     }
+}
+
+fs::path buildSlabScene(const fs::path& dir, const fs::path& gltf) {
+    const fs::path scene = dir / (gltf.stem().string() + ".ffs");
+    const ProcessResult built = runFarfield({"build", "-q", gltf.string(), "-o", scene.string()}, dir);
+    EXPECT_EQ(built.exitCode, 0) << built.describe();
+    return scene;
+}
+
+/** The centre pixel of `scene` rendered 160x120 straight down -z from 3 units, with `flags`. */
+std::array<std::uint8_t, 4> centrePixel(const fs::path& dir, const fs::path& scene, std::vector<std::string> flags) {
+    std::vector<std::string> args = {"render", scene.string(), "-o", (dir / "centre.png").string(), "--size", "160x120",
+                                     "--eye", "0,0,3", "--target", "0,0,0"};
+    args.insert(args.end(), flags.begin(), flags.end());
+    const ProcessResult r = runFarfield(args, dir);
+    EXPECT_EQ(r.exitCode, 0) << r.describe();
+    const runtime::Image image = decodeImage(dir / "centre.png");
+    if (image.width != 160 || image.height != 120)
+        return {};
+    const std::uint8_t* p = image.pixel(80, 60);
+    return {p[0], p[1], p[2], p[3]};
+}
+
+// One slab 4 x 4 x 0.1 facing the camera, alone: unlit, its front face shows the base colour's
+// sRGB codes exactly as triangles (the lit twin is darker: the light is 66 degrees off its
+// normal), and within two codes as the root's colour cube drawn as faces (ε large enough for
+// the root).
+TEST(UnlitMaterialTest, UnlitSurfacesShowTheirBaseColourAsTrianglesAndAsCubes) {
+    const fs::path dir = freshTestDir();
+    const std::vector<glm::mat4> slab = {scaling(4.0f, 4.0f, 0.1f)};
+    json unlitMaterial = kRedLit;
+    unlitMaterial["extensions"] = {{"KHR_materials_unlit", json::object()}};
+    const fs::path lit = buildSlabScene(dir, writeSlabScene(dir, "lit", glm::mat4(1.0f), slab, kRedLit, false));
+    const fs::path unlit = buildSlabScene(dir, writeSlabScene(dir, "unlit", glm::mat4(1.0f), slab, unlitMaterial, false));
+    const std::array<std::uint8_t, 3> base = {storage::linearToSrgb8(0.8f), storage::linearToSrgb8(0.1f),
+                                              storage::linearToSrgb8(0.1f)};
+
+    const auto triangles = centrePixel(dir, unlit, {"--epsilon", "0"});
+    EXPECT_EQ(triangles[0], base[0]);
+    EXPECT_EQ(triangles[1], base[1]);
+    EXPECT_EQ(triangles[2], base[2]);
+    const auto litTriangles = centrePixel(dir, lit, {"--epsilon", "0"});
+    EXPECT_LT(litTriangles[0] + 10, base[0]);
+
+    const auto cube = centrePixel(dir, unlit, {"--epsilon", "1000", "--cube-draw", "faces"});
+    for (std::size_t c = 0; c < 3; ++c)
+        EXPECT_NEAR(cube[c], base[c], 2) << "channel " << c;
+    const auto litCube = centrePixel(dir, lit, {"--epsilon", "1000", "--cube-draw", "faces"});
+    EXPECT_LT(litCube[0] + 10, base[0]);
 }
 
 } // namespace

@@ -199,7 +199,9 @@ Result<std::unique_ptr<Renderer>> Renderer::create(
     glBindVertexArray(impl->geometryVao);
     glBindVertexBuffer(0, impl->arena, 0, sizeof(storage::PackedVertex));
     glVertexAttribFormat(0, 3, GL_FLOAT, GL_FALSE, offsetof(storage::PackedVertex, position));
-    glVertexAttribFormat(1, 2, GL_SHORT, GL_TRUE, offsetof(storage::PackedVertex, normalOct));
+    // As integers: the shader tells the unlit code (-32768, -32768) apart from -32767, which a
+    // normalized attribute maps to the same -1.
+    glVertexAttribIFormat(1, 2, GL_SHORT, offsetof(storage::PackedVertex, normalOct));
     glVertexAttribFormat(2, 4, GL_UNSIGNED_BYTE, GL_TRUE, offsetof(storage::PackedVertex, color));
     for (GLuint a = 0; a < 3; ++a) {
         glVertexAttribBinding(a, 0);

@@ -16,7 +16,7 @@ uniform mat4 uViewProjection;
 
 const char* const kGeometryVertexShader = R"(#version 450 core
 layout(location = 0) in vec3 aPosition;
-layout(location = 1) in vec2 aNormalOct;   // snorm16, octahedral
+layout(location = 1) in ivec2 aNormalOct;  // snorm16, octahedral; (-32768, -32768): unlit
 layout(location = 2) in vec4 aColor;       // sRGB8 rgb, linear alpha
 layout(location = 3) in uint aTransform;   // per draw, from baseInstance
 layout(std430, binding = 0) readonly buffer Transforms { mat4 transforms[]; };
@@ -41,8 +41,12 @@ vec3 srgbToLinear(vec3 c) {
 void main() {
     mat4 model = transforms[aTransform];
     gl_Position = uViewProjection * (model * vec4(aPosition, 1.0));
-    vec3 n = normalize(mat3(normalMatrices[aTransform]) * decodeOct(max(aNormalOct, vec2(-1.0))));
-    float light = uAmbient + uDiffuse * abs(dot(n, uLightDirection));
+    // storage::kUnlitNormalOct marks KHR_materials_unlit: the colour as it is (kUnlitShading).
+    float light = 1.0;
+    if (aNormalOct != ivec2(-32768)) {
+        vec3 n = normalize(mat3(normalMatrices[aTransform]) * decodeOct(max(vec2(aNormalOct) / 32767.0, vec2(-1.0))));
+        light = uAmbient + uDiffuse * abs(dot(n, uLightDirection));
+    }
     vColor = srgbToLinear(aColor.rgb) * light;
 }
 )";

@@ -24,6 +24,7 @@ struct SourceVertex {
     glm::vec3 position{0.0f};
     glm::vec3 normal{0.0f};
     glm::vec4 color{1.0f};
+    bool unlit = false; ///< KHR_materials_unlit: stored with storage::kUnlitNormalOct
 };
 
 /** Packs one vertex; a zero or non-finite normal is replaced by `fallbackNormal`. */

@@ -15,6 +15,9 @@ inline constexpr std::array<float, 3> kLightDirection = {0.3714172f, 0.8356886f,
 inline constexpr float kAmbient = 0.35f;
 inline constexpr float kDiffuse = 0.65f;
 
+/** Light factor of an unlit surface (KHR_materials_unlit): its colour as it is. */
+inline constexpr float kUnlitShading = 1.0f;
+
 /** Light factor for a unit normal: kAmbient + kDiffuse * |n . L|. */
 inline float shadingFactor(float nx, float ny, float nz) noexcept {
     const float cosine = nx * kLightDirection[0] + ny * kLightDirection[1] + nz * kLightDirection[2];
