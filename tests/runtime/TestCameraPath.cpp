@@ -1,5 +1,6 @@
 #include <ff/runtime/CameraPath.h>
 #include <ff/runtime/CameraPathGenerators.h>
+#include <ff/runtime/PathCuts.h>
 
 #include <gtest/gtest.h>
 
@@ -523,6 +524,37 @@ TEST(CameraPathGeneratorsTest, HandleFlatAndTinyFramesAndRejectBadBounds) {
     PathGeneratorOptions zeroFrames;
     zeroFrames.frames = 0;
     EXPECT_EQ(makeOrbitPath(kBounds, zeroFrames).status().code(), ErrorCode::InvalidArgument);
+}
+
+// Cuts are where a path jumps: a teleport path's holds start with one (103 frames, 5 holds of
+// 20, the last 23: cuts at 0, 20, 40, 60, 80), an orbit of 60 frames moving a quarter of the
+// radius a frame (issue 13's fast orbit) has only the cold start.
+std::vector<std::int64_t> cutFrames(const CameraPath& path) {
+    const std::vector<bool> cuts = findPathCuts(path, static_cast<double>(kBounds.radius()));
+    std::vector<std::int64_t> frames;
+    for (std::size_t f = 0; f < cuts.size(); ++f)
+        if (cuts[f])
+            frames.push_back(static_cast<std::int64_t>(f));
+    return frames;
+}
+
+TEST(PathCutsTest, TeleportsCutAtEveryJumpAndOrbitsOnlyAtTheColdStart) {
+    PathGeneratorOptions options;
+    options.frames = 103;
+    options.teleports = 5;
+    options.seed = 7;
+    auto teleports = makeTeleportPath(kBounds, options);
+    ASSERT_TRUE(teleports) << teleports.status().toString();
+    EXPECT_EQ(cutFrames(*teleports), (std::vector<std::int64_t>{0, 20, 40, 60, 80}));
+
+    PathGeneratorOptions orbit;
+    orbit.frames = 60;
+    auto fast = makeOrbitPath(kBounds, orbit);
+    ASSERT_TRUE(fast) << fast.status().toString();
+    // 2.5 radii around the centre in 60 frames: about 0.26 radii a frame.
+    const double step = glm::length(glm::dvec3(fast->sample(fast->frameTime(1)).eye - fast->sample(fast->frameTime(0)).eye));
+    EXPECT_GT(step, 0.2 * static_cast<double>(kBounds.radius()));
+    EXPECT_EQ(cutFrames(*fast), (std::vector<std::int64_t>{0}));
 }
 
 } // namespace

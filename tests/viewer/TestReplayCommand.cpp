@@ -68,6 +68,37 @@ TEST(ReplayCommandTest, ResidentBytesStayWithinTheBudgetAlongAPath) {
         EXPECT_LE(f["resident_bytes"].get<std::uint64_t>(), 1u << 20) << "frame " << f["frame"];
 }
 
+// Frames to full quality are counted per path segment between cuts (teleports, the cold start).
+// A budget below what one frame needs leaves debt in every frame of an orbit: its one segment
+// never converged, and the summary says so instead of reporting 1 (issue 13). With the budget
+// the view needs, every teleport's segment converges and is counted.
+TEST(ReplayCommandTest, ASegmentThatNeverConvergesIsReportedAsSuch) {
+    const fs::path dir = freshTestDir();
+    const fs::path scene = buildForest(dir);
+    const fs::path orbit = makePath(dir, scene, "orbit", 12);
+    const fs::path starved = dir / "starved.json";
+    ASSERT_EQ(runFarfield({"replay", scene.string(), orbit.string(), "--cache-mb", "1", "--size", "160x120",
+                           "--summary", starved.string()}, dir).exitCode, 0);
+    const json s = readJsonFile(starved);
+    ASSERT_TRUE(s.is_object());
+    SCOPED_TRACE(s.dump());
+    ASSERT_EQ(s["debt_frames"], 12); // the precondition: 1 MiB is below one frame's need
+    EXPECT_EQ(s["path_segments"], 1);
+    EXPECT_EQ(s["never_converged"], 1);
+    EXPECT_TRUE(s["max_frames_to_full_quality"].is_null());
+
+    const fs::path teleports = makePath(dir, scene, "teleports", 24);
+    const fs::path ample = dir / "ample.json";
+    ASSERT_EQ(runFarfield({"replay", scene.string(), teleports.string(), "--cache-mb", "64", "--size", "160x120",
+                           "--summary", ample.string()}, dir).exitCode, 0);
+    const json t = readJsonFile(ample);
+    ASSERT_TRUE(t.is_object());
+    EXPECT_EQ(t["path_segments"], 3);
+    EXPECT_EQ(t["never_converged"], 0);
+    ASSERT_TRUE(t["max_frames_to_full_quality"].is_number()) << t.dump();
+    EXPECT_GE(t["max_frames_to_full_quality"].get<int>(), 1);
+}
+
 TEST(ReplayCommandTest, SyncModeIsDeterministicAndCompletesEveryFrame) {
     const fs::path dir = freshTestDir();
     const fs::path scene = buildForest(dir);

@@ -3,6 +3,7 @@
 // file costs nothing.
 
 #include "Commands.h"
+#include "OutputFile.h"
 #include "bench/Benchmarks.h"
 
 #include <unistd.h>
@@ -120,6 +121,13 @@ int runBench(const BenchArgs& args) {
         for (const auto& run : runs)
             std::printf("%s: ok\n", run.first.c_str());
         return 0;
+    }
+    // The folders first: an unwritable --out fails before hours of benchmarks, not after.
+    for (const auto& [flag, folder] : {std::pair{"--out", &args.out}, std::pair{"--work-dir", &args.work}}) {
+        if (folder->empty())
+            continue; // --work-dir defaults to a folder of the bench's own
+        if (const Status ready = prepareOutputFolder(*folder); !ready)
+            return reportError("bench", ready.withContext(flag));
     }
     bench::BenchOptions options;
     options.outDir = args.out;

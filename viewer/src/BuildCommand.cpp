@@ -1,4 +1,5 @@
 #include "Commands.h"
+#include "OutputFile.h"
 #include "ProgressBar.h"
 #include "SceneInput.h"
 #include "Units.h"
@@ -94,6 +95,9 @@ int runBuild(const BuildArgs& args) {
                 "build",
                 Status(ErrorCode::NotFound,
                        "output directory " + outputDirectory.string() + " does not exist"));
+    auto reportFile = reserveIfNamed(args.report, OutputKind::Text);
+    if (!reportFile)
+        return reportError("build", reportFile.status().withContext("--report"));
     auto sceneBuilder = builder::SceneBuilder::create(args.output, options);
     if (!sceneBuilder)
         return reportError("build", sceneBuilder.status());
@@ -116,11 +120,9 @@ int runBuild(const BuildArgs& args) {
     json["output"] = args.output;
     json["declared_triangles"] = input->declaredTriangles;
     json["warnings"] = input->warnings;
-    if (!args.report.empty()) {
-        std::ofstream out(args.report);
-        out << json.dump(2) << "\n";
-        if (!out)
-            return reportError("build", Status(ErrorCode::IoError, "cannot write report " + args.report));
+    if (*reportFile) {
+        if (const Status written = (*reportFile)->commitText(json.dump(2) + "\n"); !written)
+            return reportError("build", written.withContext("--report"));
     }
     if (!args.quiet) {
         for (const std::string& w : input->warnings)

@@ -16,6 +16,7 @@ namespace {
 struct Plugin {
     FfOiioWriteImageFn write = nullptr;
     FfOiioReadImageFn read = nullptr;
+    FfOiioCheckImageFormatFn checkFormat = nullptr;
     FfOiioFreeStatusFn freeStatus = nullptr;
     Status status;
 };
@@ -40,8 +41,9 @@ const Plugin& plugin() {
         const auto version = reinterpret_cast<FfOiioPluginVersionFn>(dlsym(handle, "ffOiioPluginVersion"));
         p.write = reinterpret_cast<FfOiioWriteImageFn>(dlsym(handle, "ffOiioWriteImage"));
         p.read = reinterpret_cast<FfOiioReadImageFn>(dlsym(handle, "ffOiioReadImage"));
+        p.checkFormat = reinterpret_cast<FfOiioCheckImageFormatFn>(dlsym(handle, "ffOiioCheckImageFormat"));
         p.freeStatus = reinterpret_cast<FfOiioFreeStatusFn>(dlsym(handle, "ffOiioFreeStatus"));
-        if (!version || !p.write || !p.read || !p.freeStatus || version() != kOiioPluginVersion)
+        if (!version || !p.write || !p.read || !p.checkFormat || !p.freeStatus || version() != kOiioPluginVersion)
             p.status = Status(ErrorCode::Unsupported, "libff_oiio.so does not match this farfield");
         return p;
     }();
@@ -61,6 +63,13 @@ Status writeImage(const std::filesystem::path& path, const runtime::Image& image
     if (!p.status.isOk())
         return p.status;
     return take(p, p.write(path.c_str(), &image, withCoverage ? 1 : 0));
+}
+
+Status checkImageFormat(const std::filesystem::path& path) {
+    const Plugin& p = plugin();
+    if (!p.status.isOk())
+        return p.status;
+    return take(p, p.checkFormat(path.c_str()));
 }
 
 Result<runtime::Image> readImage(const std::filesystem::path& path) {

@@ -12,6 +12,9 @@ namespace ff::viewer {
 [[nodiscard]] Status writeImage(
         const std::filesystem::path& path, const runtime::Image& image, bool withCoverage = false);
 
+/** Ok if writeImage() knows the format of `path`'s extension; writes nothing. */
+[[nodiscard]] Status checkImageFormat(const std::filesystem::path& path);
+
 /** Reads an RGBA8 image (for comparisons in tests and benches). */
 [[nodiscard]] Result<runtime::Image> readImage(const std::filesystem::path& path);
 

@@ -87,6 +87,13 @@ ff::Status* ffOiioReadImage(const char* path, ff::runtime::Image* out) {
     return new ff::Status();
 }
 
+ff::Status* ffOiioCheckImageFormat(const char* path) {
+    if (!OIIO::ImageOutput::create(path))
+        return new ff::Status(ff::ErrorCode::InvalidArgument,
+                              std::string("cannot write ") + path + ": no image format for its extension");
+    return new ff::Status();
+}
+
 void ffOiioFreeStatus(ff::Status* status) { delete status; }
 
 } // extern "C"

@@ -1,5 +1,6 @@
 #include "CameraOptions.h"
 #include "Commands.h"
+#include "OutputFile.h"
 
 #include <ff/runtime/CameraPath.h>
 #include <ff/runtime/CameraPathGenerators.h>
@@ -7,7 +8,6 @@
 
 #include <cstdint>
 #include <cstdio>
-#include <fstream>
 #include <memory>
 #include <string>
 #include <vector>
@@ -70,6 +70,9 @@ Result<runtime::CameraPath> gltfCameraPath(const storage::SceneFile& scene, cons
 }
 
 int runPath(const PathArgs& args) {
+    auto output = PendingOutput::reserve(args.output, OutputKind::Text);
+    if (!output)
+        return reportError("path", output.status());
     auto scene = storage::SceneFile::open(args.scene);
     if (!scene)
         return reportError("path", scene.status().withContext(args.scene));
@@ -90,11 +93,8 @@ int runPath(const PathArgs& args) {
     if (args.kind != "gltf")
         path = path->translated(sceneOrigin(**scene));
 
-    std::ofstream file(args.output, std::ios::binary | std::ios::trunc);
-    file << path->toJson();
-    file.close();
-    if (!file)
-        return reportError("path", Status(ErrorCode::IoError, "cannot write " + args.output));
+    if (const Status written = output->commitText(path->toJson()); !written)
+        return reportError("path", written);
     std::printf(
             "%s: %s path, %lld frames over %.3g s, %zu keyframes (%s)\n",
             args.output.c_str(),

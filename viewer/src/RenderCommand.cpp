@@ -1,6 +1,7 @@
 #include "CameraOptions.h"
 #include "Commands.h"
 #include "ImageOutput.h"
+#include "OutputFile.h"
 #include "Units.h"
 
 #include <ff/runtime/FrameRenderer.h>
@@ -10,7 +11,6 @@
 #include <nlohmann/json.hpp>
 
 #include <cstdio>
-#include <fstream>
 #include <memory>
 #include <string>
 #include <vector>
@@ -53,6 +53,14 @@ int runRender(const RenderArgs& args) {
     if (!gpuBudget)
         return reportError("render", gpuBudget.status().withContext("--gpu-budget"));
 
+    // Outputs first: an unwritable path fails before the work, not after it.
+    auto image = reserveIfNamed(args.output, OutputKind::Image);
+    if (!image)
+        return reportError("render", image.status());
+    auto statsFile = reserveIfNamed(args.stats, OutputKind::Text);
+    if (!statsFile)
+        return reportError("render", statsFile.status().withContext("--stats"));
+
     auto scene = storage::SceneFile::open(args.scene);
     if (!scene)
         return reportError("render", scene.status().withContext(args.scene));
@@ -90,11 +98,14 @@ int runRender(const RenderArgs& args) {
         std::printf("%s\n", stats.dump().c_str());
         frames.push_back(stats);
     }
-    if (!args.output.empty()) {
-        if (const Status written = writeImage(args.output, frame->image, args.coverage); !written)
+    if (*image) {
+        Status written = writeImage((*image)->temporaryPath(), frame->image, args.coverage);
+        if (written)
+            written = (*image)->commit();
+        if (!written)
             return reportError("render", written);
     }
-    if (!args.stats.empty()) {
+    if (*statsFile) {
         const nlohmann::json out = {{"scene", args.scene},
                                     {"method", args.method},
                                     {"epsilon", args.epsilon},
@@ -102,10 +113,8 @@ int runRender(const RenderArgs& args) {
                                     {"height", size->y},
                                     {"supersample", args.supersample},
                                     {"frames", frames}};
-        std::ofstream file(args.stats);
-        file << out.dump(2) << "\n";
-        if (!file)
-            return reportError("render", Status(ErrorCode::IoError, "cannot write " + args.stats));
+        if (const Status written = (*statsFile)->commitText(out.dump(2) + "\n"); !written)
+            return reportError("render", written);
     }
     // Unreadable pages were drawn with their ancestors' cubes; the image exists, but the file
     // is damaged and the exit status says so.

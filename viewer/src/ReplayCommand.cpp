@@ -5,6 +5,7 @@
 #include "CameraOptions.h"
 #include "Commands.h"
 #include "ImageOutput.h"
+#include "OutputFile.h"
 #include "StreamingPages.h"
 #include "Units.h"
 
@@ -15,6 +16,7 @@
 #include <ff/runtime/FrameRenderer.h>
 #include <ff/runtime/ImageMetrics.h>
 #include <ff/runtime/OffscreenContext.h>
+#include <ff/runtime/PathCuts.h>
 
 #include <nlohmann/json.hpp>
 
@@ -117,6 +119,20 @@ int runReplay(const ReplayArgs& args) {
     auto path = readCameraPath(args.path);
     if (!path)
         return reportError("replay", path.status());
+    // Outputs first: an unwritable path fails before the replay, not after it.
+    auto csvFile = reserveIfNamed(args.csv, OutputKind::Text);
+    if (!csvFile)
+        return reportError("replay", csvFile.status().withContext("--csv"));
+    auto jsonFile = reserveIfNamed(args.json, OutputKind::Text);
+    if (!jsonFile)
+        return reportError("replay", jsonFile.status().withContext("--json"));
+    auto summaryFile = reserveIfNamed(args.summary, OutputKind::Text);
+    if (!summaryFile)
+        return reportError("replay", summaryFile.status().withContext("--summary"));
+    if (!args.framesDir.empty()) {
+        if (const Status folder = prepareOutputFolder(args.framesDir); !folder)
+            return reportError("replay", folder.withContext("--frames-dir"));
+    }
 
     auto scene = storage::SceneFile::open(args.scene);
     if (!scene)
@@ -151,8 +167,6 @@ int runReplay(const ReplayArgs& args) {
             return reportError("replay", reference.status());
         complete = std::move(*reference);
     }
-    if (!args.framesDir.empty())
-        std::filesystem::create_directories(args.framesDir);
 
     runtime::SelectionOptions selection;
     selection.epsilonPixels = args.epsilon;
@@ -162,8 +176,8 @@ int runReplay(const ReplayArgs& args) {
     const std::int64_t frames = path->frameCount();
     nlohmann::json perFrame = nlohmann::json::array();
     std::ofstream csv;
-    if (!args.csv.empty()) {
-        csv.open(args.csv);
+    if (*csvFile) {
+        csv.open((*csvFile)->temporaryPath(), std::ios::binary | std::ios::trunc);
         csv << "frame,time_s,frame_ms,select_ms,draw_ms,requests,hits,misses,bytes_read,resident_bytes,"
                "gpu_resident_bytes,in_flight,evicted,dropped,nodes_deferred,triangles,cubes,stalled,psnr_db,holes,"
                "node_page_bytes,geometry_page_bytes\n";
@@ -180,13 +194,15 @@ int runReplay(const ReplayArgs& args) {
     } peakUse;
     ProcessMemory peakMemory;
     std::vector<Status> failures;
-    // Frames to full quality: counted from the first frame after a jump in the camera (a
-    // teleport, or the cold start) to the first frame without debt.
-    std::int64_t sinceJump = 0;
+    // Frames to full quality, per segment of the path: from a cut (a teleport, or the cold start;
+    // runtime/PathCuts.h) to the first frame without debt. A segment whose every frame has debt
+    // never converged, and says so.
+    const std::vector<bool> cuts = runtime::findPathCuts(*path, bounds.radius(), origin);
+    std::int64_t sinceCut = 0;
     std::int64_t maxFramesToFullQuality = 0;
-    bool converged = false;
-    glm::vec3 lastEye(NAN);
-    const float jump = 0.1f * bounds.radius();
+    std::uint64_t segments = 0;
+    std::uint64_t neverConverged = 0;
+    bool converged = true; // no segment is open before frame 0
     // Zero, not the stats after opening: frame 0 carries the root pages read before it, so the
     // per-frame columns add up to the summary's totals.
     cache::PageCacheStats previous{};
@@ -194,13 +210,12 @@ int runReplay(const ReplayArgs& args) {
     for (std::int64_t f = 0; f < frames; ++f) {
         runtime::Camera camera = path->sample(path->frameTime(f), origin);
         camera.fitClipPlanes(bounds);
-        if (!(glm::length(camera.eye - lastEye) <= jump)) { // NaN on the first frame: a jump
-            if (!converged && f > 0)
-                maxFramesToFullQuality = std::max(maxFramesToFullQuality, sinceJump);
-            sinceJump = 0;
+        if (cuts[static_cast<std::size_t>(f)]) {
+            neverConverged += converged ? 0 : 1;
+            ++segments;
+            sinceCut = 0;
             converged = false;
         }
-        lastEye = camera.eye;
 
         if (args.prefetchFrames > 0 && !args.sync) {
             runtime::Camera ahead = path->sample(path->frameTime(std::min<std::int64_t>(f + args.prefetchFrames, frames - 1)), origin);
@@ -239,10 +254,10 @@ int runReplay(const ReplayArgs& args) {
         debtFrames += debt ? 1 : 0;
         stalledFrames += stalled ? 1 : 0;
         if (!converged) {
-            ++sinceJump;
+            ++sinceCut;
             if (!debt) {
                 converged = true;
-                maxFramesToFullQuality = std::max(maxFramesToFullQuality, sinceJump);
+                maxFramesToFullQuality = std::max(maxFramesToFullQuality, sinceCut);
             }
         }
 
@@ -300,8 +315,7 @@ int runReplay(const ReplayArgs& args) {
         perFrame.push_back(row);
         previous = now;
     }
-    if (!converged)
-        maxFramesToFullQuality = std::max(maxFramesToFullQuality, sinceJump);
+    neverConverged += converged ? 0 : 1;
 
     const cache::PageCacheStats& total = pageCache->stats();
     const std::uint64_t uniqueBytes = counting->uniquePages() * (*scene)->pageSize();
@@ -333,7 +347,11 @@ int runReplay(const ReplayArgs& args) {
             {"budget_bytes", pageCache->budgetBytes()},
             {"debt_frames", debtFrames},
             {"stalled_frames", stalledFrames},
-            {"max_frames_to_full_quality", maxFramesToFullQuality},
+            // null when a segment never reached full quality: its count is in never_converged.
+            {"max_frames_to_full_quality",
+             neverConverged > 0 ? nlohmann::json(nullptr) : nlohmann::json(maxFramesToFullQuality)},
+            {"path_segments", segments},
+            {"never_converged", neverConverged},
             {"requests", total.requests},
             {"cancelled", total.cancelled},
             {"evicted", total.evicted},
@@ -342,15 +360,19 @@ int runReplay(const ReplayArgs& args) {
             {"peak_rss_anon_bytes", peakMemory.anonBytes},
             {"peak_rss_file_bytes", peakMemory.fileBytes},
     };
-    if (!args.json.empty()) {
-        std::ofstream out(args.json);
-        out << perFrame.dump(1) << "\n";
+    if (*csvFile) {
+        csv.close();
+        Status written = csv ? (*csvFile)->commit() : Status(ErrorCode::IoError, "cannot write " + args.csv);
+        if (!written)
+            return reportError("replay", written);
     }
-    if (!args.summary.empty()) {
-        std::ofstream out(args.summary);
-        out << summary.dump(2) << "\n";
-        if (!out)
-            return reportError("replay", Status(ErrorCode::IoError, "cannot write " + args.summary));
+    if (*jsonFile) {
+        if (const Status written = (*jsonFile)->commitText(perFrame.dump(1) + "\n"); !written)
+            return reportError("replay", written);
+    }
+    if (*summaryFile) {
+        if (const Status written = (*summaryFile)->commitText(summary.dump(2) + "\n"); !written)
+            return reportError("replay", written);
     }
     std::printf("%s\n", summary.dump().c_str());
     for (const Status& failure : failures)

@@ -1,4 +1,5 @@
 #include "Commands.h"
+#include "OutputFile.h"
 #include "SceneStats.h"
 #include "Units.h"
 
@@ -6,7 +7,6 @@
 
 #include <cstdio>
 #include <filesystem>
-#include <fstream>
 #include <memory>
 #include <string>
 #include <vector>
@@ -149,6 +149,9 @@ void printText(const SceneStats& s) {
 }
 
 int runStats(const StatsArgs& args) {
+    auto jsonFile = reserveIfNamed(args.json == "-" ? std::string() : args.json, OutputKind::Text);
+    if (!jsonFile)
+        return reportError("stats", jsonFile.status().withContext("--json"));
     auto scene = storage::SceneFile::open(args.scene);
     if (!scene)
         return reportError("stats", scene.status().withContext(args.scene));
@@ -177,12 +180,9 @@ int runStats(const StatsArgs& args) {
         return 0;
     }
     printText(*stats);
-    if (!args.json.empty()) {
-        std::ofstream file(args.json, std::ios::binary | std::ios::trunc);
-        file << stats->toJson().dump(2) << "\n";
-        file.close();
-        if (!file)
-            return reportError("stats", Status(ErrorCode::IoError, "cannot write " + args.json));
+    if (*jsonFile) {
+        if (const Status written = (*jsonFile)->commitText(stats->toJson().dump(2) + "\n"); !written)
+            return reportError("stats", written);
     }
     return 0;
 }

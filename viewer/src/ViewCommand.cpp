@@ -3,6 +3,7 @@
 #include "Commands.h"
 #include "Hud.h"
 #include "ImageOutput.h"
+#include "OutputFile.h"
 #include "StreamingPages.h"
 #include "Units.h"
 #include "ViewerControls.h"
@@ -140,6 +141,13 @@ int runView(const ViewArgs& args) {
     const bool scripted = frames > 0;
     if (!args.script.empty() && !scripted)
         return reportError("view", Status(ErrorCode::InvalidArgument, "--script needs --frames"));
+
+    // Outputs first: an unwritable screenshot path fails before the window opens.
+    auto scriptedScreenshot = reserveIfNamed(args.screenshot, OutputKind::Image);
+    if (!scriptedScreenshot)
+        return reportError("view", scriptedScreenshot.status().withContext("--screenshot"));
+    if (const Status folder = prepareOutputFolder(args.screenshotDir); !folder)
+        return reportError("view", folder.withContext("--screenshot-dir"));
 
     auto scene = storage::SceneFile::open(args.scene);
     if (!scene)
@@ -283,16 +291,20 @@ int runView(const ViewArgs& args) {
 
         // Screenshots show the scene without the HUD.
         const bool lastScriptedFrame = scripted && frame + 1 == frames;
-        if (screenshot || (lastScriptedFrame && !args.screenshot.empty())) {
-            std::filesystem::path path = args.screenshot;
-            if (!lastScriptedFrame || args.screenshot.empty()) {
-                std::error_code error;
-                std::filesystem::create_directories(args.screenshotDir, error);
-                path = nextScreenshotPath(args.screenshotDir);
-            }
-            if (const Status written = writeImage(path, (*window)->readBackBuffer()); !written)
+        const bool scriptedShot = lastScriptedFrame && scriptedScreenshot->has_value();
+        if (screenshot || scriptedShot) {
+            Result<PendingOutput> output =
+                    scriptedShot ? Result<PendingOutput>(std::move(**scriptedScreenshot))
+                                 : PendingOutput::reserve(nextScreenshotPath(args.screenshotDir), OutputKind::Image);
+            Status written = output ? writeImage(output->temporaryPath(), (*window)->readBackBuffer()) : output.status();
+            if (written)
+                written = output->commit();
+            if (written)
+                std::fprintf(stderr, "farfield view: wrote %s\n", output->path().string().c_str());
+            else if (scriptedShot)
                 return reportError("view", written);
-            std::fprintf(stderr, "farfield view: wrote %s\n", path.string().c_str());
+            else
+                reportError("view", written); // a failed key-press screenshot does not end the session
         }
 
         if (controls.hudVisible) {

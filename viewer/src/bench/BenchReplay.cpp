@@ -137,7 +137,9 @@ Status runReplay(const ReplayParams& p, const Scenario& scenario, const BenchOpt
              formatBytes(replay.peakRssBytes),
              std::to_string(summary.value("debt_frames", 0)),
              std::to_string(summary.value("stalled_frames", 0)),
-             std::to_string(summary.value("max_frames_to_full_quality", 0)),
+             summary.contains("max_frames_to_full_quality") && summary["max_frames_to_full_quality"].is_number()
+                     ? std::to_string(summary["max_frames_to_full_quality"].get<std::int64_t>())
+                     : "never (" + std::to_string(summary.value("never_converged", 0)) + " segments)",
              std::to_string(summary.value("failed_pages", 0))});
 
     ReportFile mdFile(options.outDir, name, scenario.title, scenario.description);
