@@ -3,6 +3,7 @@
 #include <ff/cache/PageCache.h>
 #include <ff/cache/PageLru.h>
 
+#include <algorithm>
 #include <cmath>
 #include <condition_variable>
 #include <deque>
@@ -93,6 +94,7 @@ struct PageCache::Impl {
     PageCacheStats stats;
     std::uint64_t frame = 0;
     std::uint64_t frameBytes = 0; ///< resident bytes tryGet() handed out this frame
+    std::uint64_t previousFrameBytes = 0; ///< frameBytes of the frame before
     std::uint64_t inFlight = 0;   ///< Pending pages: queued, being read or awaiting pump()
     std::vector<std::uint64_t> scratchPages;    ///< reused by endFrame()
     std::vector<Completion> scratchCompletions; ///< reused by pump()
@@ -231,6 +233,7 @@ void PageCache::beginFrame() {
     Impl& m = *mImpl;
     FF_ASSERT(m.onOwnerThread());
     ++m.frame;
+    m.previousFrameBytes = m.frameBytes;
     m.frameBytes = 0;
     // After a setBudget() below what the previous frame held: nothing is protected now.
     if (m.stats.residentBytes > m.options.budgetBytes)
@@ -282,13 +285,17 @@ void PageCache::request(std::uint64_t page, float priority) {
         ++m.stats.failed;
         return;
     }
+    // Room for one more read beside what the frames hold: a still or slowly moving camera uses
+    // about what it used last frame, so that is claimed too, not only what this frame has used so far.
+    const std::uint64_t claimed = std::max(m.previousFrameBytes, m.frameBytes) + (m.inFlight + 1) * m.pageSize;
+    const bool noRoom = m.options.readOnlyWhatFits && claimed > m.options.budgetBytes;
     {
         std::lock_guard lock(m.shared->mutex);
-        if (m.inFlight >= m.options.maxInFlight) {
+        if (m.inFlight >= m.options.maxInFlight || noRoom) {
             // Full: displace the least urgent queued request if this one is more urgent.
             const auto lowest = m.shared->queue.lowest();
             if (!lowest || lowest->second >= priority) {
-                ++m.stats.refused;
+                ++(noRoom ? m.stats.noRoom : m.stats.refused);
                 return;
             }
             m.shared->queue.erase(lowest->first);

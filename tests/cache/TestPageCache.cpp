@@ -10,6 +10,7 @@
 #include <memory>
 #include <numeric>
 #include <random>
+#include <set>
 #include <thread>
 #include <vector>
 
@@ -387,6 +388,107 @@ TEST(PageCacheTest, CompletionsEvictOnlyPagesTheFrameDoesNotUse) {
     EXPECT_EQ(cache->stats().evicted, 3u);
     EXPECT_EQ(cache->stats().dropped, 0u);
     EXPECT_TRUE(withinBudget(*cache));
+}
+
+// ---- reading only what fits (readOnlyWhatFits) ------------------------------------------
+
+PageCacheOptions fitting(PageCacheOptions options) {
+    options.readOnlyWhatFits = true;
+    return options;
+}
+
+TEST(PageCacheTest, ReadOnlyWhatFitsReadsNothingWhileTheFrameFillsTheBudget) {
+    auto source = std::make_shared<FakePageSource>(kPageSize, 10);
+    auto cache = makeCache(source, fitting(makeOptions(4 * kPageSize)));
+    loadPages(*cache, range(0, 4));
+    const std::uint64_t readBefore = cache->stats().bytesRead;
+    cache->beginFrame();
+    for (std::uint64_t page = 0; page < 4; ++page)
+        ASSERT_TRUE(cache->tryGet(page).has_value());
+    for (std::uint64_t page = 4; page < 10; ++page)
+        cache->request(page, 5.0f);
+    cache->endFrame();
+    cache->drain();
+    // The same frame with the option off reads six pages and drops them all
+    // (NeverEvictsPagesUsedByTheCurrentFrame); here nothing is read.
+    EXPECT_EQ(cache->stats().noRoom, 6u);
+    EXPECT_EQ(cache->stats().bytesRead, readBefore);
+    EXPECT_EQ(cache->stats().dropped, 0u);
+    for (std::uint64_t page = 4; page < 10; ++page)
+        EXPECT_EQ(cache->state(page), PageState::Absent);
+}
+
+TEST(PageCacheTest, ReadOnlyWhatFitsCountsReadsUnderWayAndThePreviousFramesPages) {
+    auto source = std::make_shared<FakePageSource>(kPageSize, 20);
+    source->closeGate();
+    auto cache = makeCache(source, fitting(makeOptions(6 * kPageSize, 1)));
+    cache->beginFrame();
+    for (std::uint64_t page = 0; page < 10; ++page)
+        cache->request(page, 1.0f);
+    EXPECT_EQ(cache->stats().requests, 6u); // six reads under way fill the budget
+    EXPECT_EQ(cache->stats().noRoom, 4u);
+    // More urgent than what is queued: displaces the least urgent queued request.
+    cache->request(10, 9.0f);
+    EXPECT_EQ(cache->stats().requests, 7u);
+    EXPECT_EQ(cache->stats().cancelled, 1u);
+    EXPECT_EQ(cache->stats().noRoom, 4u);
+    cache->endFrame();
+    source->openGate();
+    cache->drain();
+    EXPECT_EQ(cache->stats().residentBytes, 6u * kPageSize);
+
+    // A frame that used five pages: the next frame may claim only one more read, even before
+    // it has used anything itself.
+    cache->beginFrame();
+    std::uint64_t used = 0;
+    for (std::uint64_t page = 0; page <= 10 && used < 5; ++page)
+        used += cache->tryGet(page).has_value() ? 1u : 0u;
+    ASSERT_EQ(used, 5u);
+    cache->endFrame();
+    cache->beginFrame();
+    cache->request(15, 1.0f);
+    cache->request(16, 1.0f);
+    EXPECT_EQ(cache->stats().requests, 8u);
+    EXPECT_EQ(cache->stats().noRoom, 5u);
+    cache->endFrame();
+    cache->drain();
+}
+
+// A still camera whose frame needs 20 pages under an 8-page budget, 40 frames: with the option
+// every page is read once and reading stops once the budget is full; without it the missing
+// twelve are read and dropped again every frame (the thrash of issue 13).
+TEST(PageCacheTest, AStillFrameNeedingMoreThanTheBudgetStopsReadingOnceItIsFull) {
+    for (const bool readOnlyWhatFits : {true, false}) {
+        SCOPED_TRACE(readOnlyWhatFits ? "reading only what fits" : "reading everything asked for");
+        auto source = std::make_shared<FakePageSource>(kPageSize, 20);
+        PageCacheOptions options = makeOptions(8 * kPageSize, 2, 64);
+        options.readOnlyWhatFits = readOnlyWhatFits;
+        auto cache = makeCache(source, options);
+        std::uint64_t readsInTheLastHalf = 0;
+        for (int frame = 0; frame < 40; ++frame) {
+            const std::uint64_t before = cache->stats().bytesRead;
+            cache->beginFrame();
+            for (std::uint64_t page = 0; page < 20; ++page) {
+                if (!cache->tryGet(page))
+                    cache->request(page, static_cast<float>(20 - page));
+            }
+            cache->endFrame();
+            cache->drain();
+            ASSERT_TRUE(withinBudget(*cache));
+            if (frame >= 20)
+                readsInTheLastHalf += cache->stats().bytesRead - before;
+        }
+        const std::vector<std::uint64_t> reads = source->readOrder();
+        const std::set<std::uint64_t> unique(reads.begin(), reads.end());
+        if (readOnlyWhatFits) {
+            EXPECT_EQ(reads.size(), unique.size()) << "a page was read twice";
+            EXPECT_EQ(readsInTheLastHalf, 0u);
+            EXPECT_EQ(cache->stats().residentBytes, 8u * kPageSize);
+        } else {
+            EXPECT_GT(reads.size(), 10 * unique.size());
+            EXPECT_GT(readsInTheLastHalf, 0u);
+        }
+    }
 }
 
 TEST(PageCacheTest, SetBudgetShrinkingEvictsButKeepsCurrentFramePages) {

@@ -99,6 +99,47 @@ TEST(ReplayCommandTest, ASegmentThatNeverConvergesIsReportedAsSuch) {
     EXPECT_GE(t["max_frames_to_full_quality"].get<int>(), 1);
 }
 
+// At the budget's edge (1 MiB, below what one frame of the 16-tree forest needs: every frame has
+// debt) the cache reads only what it can install. Before, each frame asked again for the pages
+// it could not fit, read them and dropped them: an orbit read 8-22x its unique bytes. Now a
+// frame keeps the coarser cut it has: over_fetch <= 1.5, and a camera that holds still stops
+// reading (measured when written: nothing read after frame 6 of 40; orbit over_fetch 1.05).
+TEST(ReplayCommandTest, AtTheBudgetsEdgeAFrameKeepsItsCutInsteadOfReadingWhatItMustDrop) {
+    const fs::path dir = freshTestDir();
+    const fs::path scene = buildForest(dir);
+    const fs::path orbit = makePath(dir, scene, "orbit", 24);
+    const json orbitPath = readJsonFile(orbit);
+    ASSERT_TRUE(orbitPath.is_object());
+    json first = orbitPath["keyframes"][0];
+    json last = first;
+    first["time"] = 0.0;
+    last["time"] = 1.0;
+    const fs::path still = dir / "still.json";
+    std::ofstream(still) << json{{"interpolation", "linear"}, {"frames", 40}, {"keyframes", {first, last}}}.dump();
+
+    for (const fs::path& path : {orbit, still}) {
+        SCOPED_TRACE(path.filename().string());
+        const fs::path frames = dir / "frames.json";
+        const fs::path summary = dir / "summary.json";
+        const ProcessResult run = runFarfield({"replay", scene.string(), path.string(), "--cache-mb", "1", "--size",
+                                               "160x120", "--json", frames.string(), "--summary", summary.string()},
+                                              dir);
+        ASSERT_EQ(run.exitCode, 0) << run.describe();
+        const json s = readJsonFile(summary);
+        ASSERT_TRUE(s.is_object());
+        SCOPED_TRACE(s.dump());
+        ASSERT_EQ(s["debt_frames"], s["frames"]); // the precondition: the budget is below one frame's need
+        EXPECT_LE(s["over_fetch"].get<double>(), 1.5);
+        EXPECT_GT(s["no_room"].get<std::uint64_t>(), 0u);
+        if (path == still) {
+            const std::vector<json> perFrame = readFrames(frames);
+            ASSERT_EQ(perFrame.size(), 40u);
+            for (std::size_t f = 30; f < perFrame.size(); ++f)
+                EXPECT_EQ(perFrame[f]["bytes_read"], 0) << "frame " << f;
+        }
+    }
+}
+
 TEST(ReplayCommandTest, SyncModeIsDeterministicAndCompletesEveryFrame) {
     const fs::path dir = freshTestDir();
     const fs::path scene = buildForest(dir);

@@ -354,6 +354,8 @@ int runReplay(const ReplayArgs& args) {
             {"never_converged", neverConverged},
             {"requests", total.requests},
             {"cancelled", total.cancelled},
+            {"refused", total.refused},
+            {"no_room", total.noRoom},
             {"evicted", total.evicted},
             {"dropped", total.dropped},
             {"failed_pages", failures.size()},

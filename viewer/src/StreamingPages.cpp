@@ -21,6 +21,9 @@ Result<StreamingPages> openStreaming(
     options.budgetBytes = budgetBytes;
     options.ioThreads = ioThreads;
     options.maxInFlight = maxInFlight;
+    // A frame that needs more than the budget keeps the cut it has instead of reading pages it
+    // can only drop (docs/methods.md, "At the budget's edge").
+    options.readOnlyWhatFits = true;
     StreamingPages pages;
     FF_ASSIGN_OR_RETURN(pages.cache, cache::PageCache::create(std::move(source), options));
     const std::uint64_t rootPage = scene.header().root.page;

@@ -12,8 +12,9 @@
 //                 the resident set.
 //
 // Budget: resident bytes (pages handed out by tryGet and kept) never exceed budgetBytes; reads
-// in flight hold their own buffers, bounded by maxInFlight pages. A completion that cannot fit
-// without evicting a page the current frame uses is dropped (and counted), never forced in.
+// in flight hold their own buffers, bounded by maxInFlight pages. A request the budget has no
+// room for beside the frames' pages is not read (readOnlyWhatFits); a completion that cannot
+// fit without evicting a page the current frame uses is dropped (and counted), never forced in.
 // The one exception is setBudget() below the bytes the current frame holds: see there.
 //
 // Page life cycle (state()):  Absent -request-> Pending -read ok, fits-> Resident -evict-> Absent
@@ -56,6 +57,16 @@ struct PageCacheOptions {
      *  exactly what it needs, so a working set at the edge of the budget does not evict one
      *  page per install, every frame. In [0, 1); 0 disables. */
     double hysteresis = 0.05;
+    /** Read only what can be installed: a new request is not queued (stats.noRoom; the caller
+     *  asks again next frame) while the pages the frames hold — the larger of the previous
+     *  frame's and the current frame's so far — plus the reads under way leave no room for it in
+     *  the budget; as with maxInFlight, it displaces a less urgent queued request instead. A
+     *  frame that needs more than the budget then keeps the coarser cut it has, reading nothing,
+     *  rather than reading pages that can only be dropped and asking for them again every frame
+     *  (an orbit at the budget's edge read 8-22x its unique bytes). Off (the default: the
+     *  cache reads what it is asked for), a completion without room is dropped instead; the
+     *  viewer's streaming sessions turn it on. */
+    bool readOnlyWhatFits = false;
 };
 
 enum class PageState { Resident, Pending, Failed, Absent };
@@ -67,6 +78,7 @@ struct PageCacheStats {
     std::uint64_t misses = 0;    ///< tryGet did not
     std::uint64_t requests = 0;  ///< new requests queued
     std::uint64_t refused = 0;   ///< new requests not queued: maxInFlight reached
+    std::uint64_t noRoom = 0;    ///< new requests not queued: no room in the budget (readOnlyWhatFits)
     std::uint64_t cancelled = 0; ///< queued requests dropped: not renewed, or displaced
     std::uint64_t completed = 0; ///< reads moved into the resident set
     std::uint64_t dropped = 0;   ///< reads that could not fit the budget
