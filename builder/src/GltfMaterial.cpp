@@ -67,9 +67,13 @@ Result<BaseColorInput> baseColorInput(const tinygltf::Model& model, int material
     const tinygltf::Value& extension = transform->second;
     if (!extension.IsObject())
         return invalidTransform(material, "must be an object");
-    FF_RETURN_IF_ERROR(readNumbers(extension, "offset", 2, &input.uvTransform.offset.x, material));
+    double offset[2] = {0.0, 0.0};
+    double scale[2] = {1.0, 1.0};
+    FF_RETURN_IF_ERROR(readNumbers(extension, "offset", 2, offset, material));
     FF_RETURN_IF_ERROR(readNumbers(extension, "rotation", 1, &input.uvTransform.rotation, material));
-    FF_RETURN_IF_ERROR(readNumbers(extension, "scale", 2, &input.uvTransform.scale.x, material));
+    FF_RETURN_IF_ERROR(readNumbers(extension, "scale", 2, scale, material));
+    input.uvTransform.offset = {offset[0], offset[1]};
+    input.uvTransform.scale = {scale[0], scale[1]};
     if (extension.Has("texCoord")) {
         const tinygltf::Value& texCoord = extension.Get("texCoord");
         if (!texCoord.IsInt() || texCoord.Get<int>() < 0)
