@@ -87,6 +87,11 @@ Status PendingOutput::commitText(std::string_view text) {
     return commit();
 }
 
+Status PendingOutput::commitImage(const runtime::Image& image, bool withCoverage) {
+    FF_RETURN_IF_ERROR(writeImage(mTemporary, image, withCoverage));
+    return commit();
+}
+
 Status PendingOutput::commit() {
     if (mTemporary.empty())
         return Status(ErrorCode::Internal, mPath.string() + ": output already committed");

@@ -6,6 +6,7 @@
 // a temporary name in the target folder and renamed over the target at the end, so a failure
 // never leaves half a file behind or clobbers an existing one.
 
+#include <ff/runtime/Image.h>
 #include <ff/storage/Status.h>
 
 #include <filesystem>
@@ -41,6 +42,8 @@ public:
 
     /** Replaces `text`'s target with it: writes the temporary, flushes, renames. */
     [[nodiscard]] Status commitText(std::string_view text);
+    /** Replaces the target with `image` (writeImage() into the temporary, then the rename). */
+    [[nodiscard]] Status commitImage(const runtime::Image& image, bool withCoverage = false);
     /** Renames the written temporary over the target. */
     [[nodiscard]] Status commit();
 

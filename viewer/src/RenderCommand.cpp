@@ -1,6 +1,5 @@
 #include "CameraOptions.h"
 #include "Commands.h"
-#include "ImageOutput.h"
 #include "OutputFile.h"
 #include "Units.h"
 
@@ -99,10 +98,7 @@ int runRender(const RenderArgs& args) {
         frames.push_back(stats);
     }
     if (*image) {
-        Status written = writeImage((*image)->temporaryPath(), frame->image, args.coverage);
-        if (written)
-            written = (*image)->commit();
-        if (!written)
+        if (const Status written = (*image)->commitImage(frame->image, args.coverage); !written)
             return reportError("render", written);
     }
     if (*statsFile) {

@@ -2,7 +2,6 @@
 #include "CameraOptions.h"
 #include "Commands.h"
 #include "Hud.h"
-#include "ImageOutput.h"
 #include "OutputFile.h"
 #include "StreamingPages.h"
 #include "Units.h"
@@ -296,9 +295,7 @@ int runView(const ViewArgs& args) {
             Result<PendingOutput> output =
                     scriptedShot ? Result<PendingOutput>(std::move(**scriptedScreenshot))
                                  : PendingOutput::reserve(nextScreenshotPath(args.screenshotDir), OutputKind::Image);
-            Status written = output ? writeImage(output->temporaryPath(), (*window)->readBackBuffer()) : output.status();
-            if (written)
-                written = output->commit();
+            const Status written = output ? output->commitImage((*window)->readBackBuffer()) : output.status();
             if (written)
                 std::fprintf(stderr, "farfield view: wrote %s\n", output->path().string().c_str());
             else if (scriptedShot)
