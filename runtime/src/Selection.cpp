@@ -5,7 +5,9 @@
 #include <ff/runtime/Selection.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
+#include <utility>
 
 namespace ff::runtime {
 
@@ -62,6 +64,50 @@ constexpr float kAutoPointsMaxEpsilon = 2.0f;
 constexpr int kMaxNesting = 128;
 
 } // namespace
+
+namespace {
+
+constexpr std::array<std::pair<Method, const char*>, 2> kMethods = {{
+        {Method::Hierarchical, "hierarchical"},
+        {Method::Full, "full"},
+}};
+constexpr std::array<std::pair<CubeStyle, const char*>, 3> kCubeStyles = {{
+        {CubeStyle::Auto, "auto"},
+        {CubeStyle::Faces, "faces"},
+        {CubeStyle::Points, "points"},
+}};
+
+template <typename Enum, std::size_t N>
+const char* nameIn(const std::array<std::pair<Enum, const char*>, N>& table, Enum value) noexcept {
+    for (const auto& [entry, name] : table) {
+        if (entry == value)
+            return name;
+    }
+    return "?";
+}
+
+template <typename Enum, std::size_t N>
+std::optional<Enum> parseIn(const std::array<std::pair<Enum, const char*>, N>& table, std::string_view text) noexcept {
+    for (const auto& [entry, name] : table) {
+        if (text == name)
+            return entry;
+    }
+    return std::nullopt;
+}
+
+} // namespace
+
+const char* methodName(Method method) noexcept { return nameIn(kMethods, method); }
+std::optional<Method> parseMethod(std::string_view name) noexcept { return parseIn(kMethods, name); }
+const char* cubeStyleName(CubeStyle style) noexcept { return nameIn(kCubeStyles, style); }
+std::optional<CubeStyle> parseCubeStyle(std::string_view name) noexcept { return parseIn(kCubeStyles, name); }
+
+std::vector<std::string> cubeStyleNames() {
+    std::vector<std::string> names;
+    for (const auto& entry : kCubeStyles)
+        names.emplace_back(entry.second);
+    return names;
+}
 
 Selection::Selection(const storage::SceneFile& scene, IPageAccess& pages)
     : mScene(scene)

@@ -92,7 +92,7 @@ std::string formatHud(const HudInfo& info) {
             sizeof(line),
             "eps %g px  method %s  nav %s\n",
             static_cast<double>(info.epsilonPixels),
-            info.method == runtime::Method::Full ? "full" : "hierarchical",
+            runtime::methodName(info.method),
             info.navigation);
     text += line;
     text += "triangles " + withThousands(info.trianglesDrawn) + "  cubes " +

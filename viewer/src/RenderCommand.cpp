@@ -11,6 +11,7 @@
 
 #include <cstdio>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -39,7 +40,8 @@ int runRender(const RenderArgs& args) {
     auto size = parseImageSize(args.size);
     if (!size)
         return reportError("render", size.status().withContext("--size"));
-    if (args.method != "hierarchical" && args.method != "full")
+    const std::optional<runtime::Method> method = runtime::parseMethod(args.method);
+    if (!method)
         return reportError("render", Status(ErrorCode::InvalidArgument, "--method must be hierarchical or full"));
     if (!(args.epsilon >= 0.0f))
         return reportError("render", Status(ErrorCode::InvalidArgument, "--epsilon must be >= 0"));
@@ -77,11 +79,9 @@ int runRender(const RenderArgs& args) {
         return reportError("render", renderer.status());
 
     runtime::SelectionOptions selection;
-    selection.method = args.method == "full" ? runtime::Method::Full : runtime::Method::Hierarchical;
+    selection.method = *method;
     selection.epsilonPixels = args.epsilon;
-    selection.cubeStyle = args.cubeDraw == "faces" ? runtime::CubeStyle::Faces
-                         : args.cubeDraw == "points" ? runtime::CubeStyle::Points
-                                                     : runtime::CubeStyle::Auto;
+    selection.cubeStyle = runtime::parseCubeStyle(args.cubeDraw).value_or(runtime::CubeStyle::Auto); // checked by CLI11
     selection.maxCubeAnisotropy = args.cubeAnisotropy;
     nlohmann::json frames = nlohmann::json::array();
     Result<runtime::Frame> frame = Status(ErrorCode::Internal, "no frame rendered");
@@ -131,7 +131,7 @@ CommandRunner addRenderCommand(CLI::App& app) {
     cmd->add_option("--method", args->method, "hierarchical or full (every triangle, no hierarchy)")->capture_default_str();
     cmd->add_option("--cube-draw", args->cubeDraw, "Color cubes as faces, points (one splat per cube) or auto (points when epsilon <= 2)")
             ->capture_default_str()
-            ->check(CLI::IsMember({"auto", "faces", "points"}));
+            ->check(CLI::IsMember(runtime::cubeStyleNames()));
     cmd->add_option("--cube-anisotropy", args->cubeAnisotropy,
                     "Refuse colour cubes whose coverage differs more than this between axes (0..1; 1 = never)")
             ->check(CLI::Range(0.0f, 1.0f))

@@ -118,7 +118,8 @@ int runView(const ViewArgs& args) {
     auto size = parseImageSize(args.size);
     if (!size)
         return reportError("view", size.status().withContext("--size"));
-    if (args.method != "hierarchical" && args.method != "full")
+    const std::optional<runtime::Method> method = runtime::parseMethod(args.method);
+    if (!method)
         return reportError(
                 "view",
                 Status(ErrorCode::InvalidArgument, "--method must be hierarchical or full"));
@@ -174,7 +175,7 @@ int runView(const ViewArgs& args) {
 
     ViewerControls controls;
     controls.epsilonPixels = args.epsilon;
-    controls.method = args.method == "full" ? runtime::Method::Full : runtime::Method::Hierarchical;
+    controls.method = *method;
     controls.gpuBudgetBytes = *gpuBudget;
     controls.hudVisible = !args.noHud;
     // --cache-mb streams pages through the page cache; without it every page is mapped.

@@ -3,6 +3,7 @@
 #include "BenchSupport.h"
 
 #include <cmath>
+#include <optional>
 #include <set>
 
 namespace ff::viewer::bench {
@@ -94,19 +95,11 @@ PathSpec readPathSpec(ScenarioReader& reader, PathSpec fallback, std::int64_t mi
 }
 
 const char* MethodSpec::methodName() const noexcept {
-    return isFull() ? "full" : "hierarchical";
+    return runtime::methodName(selection.method);
 }
 
 const char* MethodSpec::cubeDrawName() const noexcept {
-    switch (selection.cubeStyle) {
-    case runtime::CubeStyle::Faces:
-        return "faces";
-    case runtime::CubeStyle::Points:
-        return "points";
-    case runtime::CubeStyle::Auto:
-        break;
-    }
-    return "auto";
+    return runtime::cubeStyleName(selection.cubeStyle);
 }
 
 Status setMethodKey(MethodSpec& method, const std::string& key, const nlohmann::json& value) {
@@ -120,13 +113,10 @@ Status setMethodKey(MethodSpec& method, const std::string& key, const nlohmann::
         return Status::ok();
     }
     if (key == "cube_draw") {
-        const std::string style = value.is_string() ? value.get<std::string>() : std::string();
-        if (style == "faces")
-            method.selection.cubeStyle = runtime::CubeStyle::Faces;
-        else if (style == "points")
-            method.selection.cubeStyle = runtime::CubeStyle::Points;
-        else if (style == "auto")
-            method.selection.cubeStyle = runtime::CubeStyle::Auto;
+        const std::optional<runtime::CubeStyle> style =
+                runtime::parseCubeStyle(value.is_string() ? value.get<std::string>() : std::string());
+        if (style)
+            method.selection.cubeStyle = *style;
         else
             return Status(
                     ErrorCode::InvalidArgument,
@@ -159,8 +149,7 @@ std::vector<MethodSpec> readMethods(ScenarioReader& reader) {
     for (ScenarioReader& m : reader.objects("methods")) {
         MethodSpec method;
         const std::string kind = m.choice("method", "hierarchical", {"hierarchical", "full"});
-        method.selection.method =
-                kind == "full" ? runtime::Method::Full : runtime::Method::Hierarchical;
+        method.selection.method = runtime::parseMethod(kind).value_or(runtime::Method::Hierarchical); // choice() checked it
         for (const char* key : kSweepableMethodKeys)
             if (const nlohmann::json* value = m.raw(key))
                 if (Status status = setMethodKey(method, key, *value); !status)

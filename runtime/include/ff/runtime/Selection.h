@@ -10,7 +10,9 @@
 #include <ff/storage/Status.h>
 
 #include <cstdint>
+#include <optional>
 #include <string>
+#include <string_view>
 #include <unordered_set>
 #include <vector>
 
@@ -27,6 +29,17 @@ enum class CubeStyle {
     Points, ///< one point per cube: visible faces blended by projected area, alpha by coverage
     Auto,   ///< points when ε <= 2 pixels (every drawn cube then covers at most 4 pixels), else faces
 };
+
+/** The names users type and read (`--method`, `--cube-draw`, bench scenarios, the HUD): one
+ *  table each, in Selection.cpp. */
+const char* methodName(Method method) noexcept;
+/** "hierarchical" or "full"; nullopt for anything else. */
+std::optional<Method> parseMethod(std::string_view name) noexcept;
+const char* cubeStyleName(CubeStyle style) noexcept;
+/** "faces", "points" or "auto"; nullopt for anything else. */
+std::optional<CubeStyle> parseCubeStyle(std::string_view name) noexcept;
+/** Every cube style's name, in the table's order (option checks, messages). */
+std::vector<std::string> cubeStyleNames();
 
 /**
  * Told of what selection draws, for analysis tools (`farfield stats --paths`) and tests. Optional:
