@@ -6,6 +6,7 @@
 #include "PrototypeBuilder.h"
 #include "RunFile.h"
 
+#include <ff/storage/ProcessMemory.h>
 #include <ff/storage/SceneWriter.h>
 
 #include <glm/gtc/matrix_transform.hpp>
@@ -15,7 +16,6 @@
 #include <cerrno>
 #include <chrono>
 #include <cmath>
-#include <fstream>
 #include <limits>
 #include <string>
 #include <thread>
@@ -42,16 +42,6 @@ bool hasArea(const storage::PackedTriangle& t) {
     const glm::dvec3 c(t.vertices[2].position[0], t.vertices[2].position[1], t.vertices[2].position[2]);
     const glm::dvec3 n = glm::cross(b - a, c - a);
     return glm::dot(n, n) > 0.0;
-}
-
-std::uint64_t peakRssBytes() {
-    std::ifstream status("/proc/self/status");
-    std::string line;
-    while (std::getline(status, line)) {
-        if (line.rfind("VmHWM:", 0) == 0)
-            return std::stoull(line.substr(6)) * 1024; // reported in kB
-    }
-    return 0;
 }
 
 struct PrototypeState {
@@ -370,7 +360,7 @@ Result<BuildReport> SceneBuilder::finish() {
     report.nodeBytes = report.nodePages * page;
     report.geometryBytes = report.geometryPages * page;
     report.tableBytes = report.tablePages * page;
-    report.peakRssBytes = peakRssBytes();
+    report.peakRssBytes = storage::readProcessMemory().peakRssBytes;
     return report;
 }
 
