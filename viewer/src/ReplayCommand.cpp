@@ -6,6 +6,7 @@
 #include "Commands.h"
 #include "ImageOutput.h"
 #include "OutputFile.h"
+#include "Percentile.h"
 #include "StreamingPages.h"
 #include "Units.h"
 
@@ -17,6 +18,7 @@
 #include <ff/runtime/ImageMetrics.h>
 #include <ff/runtime/OffscreenContext.h>
 #include <ff/runtime/PathCuts.h>
+#include <ff/storage/ProcessMemory.h>
 
 #include <nlohmann/json.hpp>
 
@@ -54,33 +56,6 @@ struct ReplayArgs {
     bool error = false;
     bool coverage = false;
 };
-
-struct ProcessMemory {
-    std::uint64_t anonBytes = 0;
-    std::uint64_t fileBytes = 0;
-};
-
-// Resident memory split as the kernel counts it: heap and stacks apart from mapped files.
-ProcessMemory processMemory() {
-    ProcessMemory m;
-    std::ifstream status("/proc/self/status");
-    std::string line;
-    while (std::getline(status, line)) {
-        if (line.rfind("RssAnon:", 0) == 0)
-            m.anonBytes = std::stoull(line.substr(8)) * 1024;
-        else if (line.rfind("RssFile:", 0) == 0)
-            m.fileBytes = std::stoull(line.substr(8)) * 1024;
-    }
-    return m;
-}
-
-double percentile(std::vector<double> values, double p) {
-    if (values.empty())
-        return 0.0;
-    std::sort(values.begin(), values.end());
-    const auto index = static_cast<std::size_t>(std::ceil(p * static_cast<double>(values.size()))) - 1;
-    return values[std::min(index, values.size() - 1)];
-}
 
 /** Counts pages read, through the source, so the replay knows the unique bytes the path needed. */
 class CountingSource final : public cache::IPageSource {
@@ -192,7 +167,7 @@ int runReplay(const ReplayArgs& args) {
         std::uint64_t nodesVisited = 0;
         std::uint64_t trianglesDrawn = 0;
     } peakUse;
-    ProcessMemory peakMemory;
+    storage::ProcessMemory peakMemory; // resident memory split: heap and stacks apart from mapped files
     std::vector<Status> failures;
     // Frames to full quality, per segment of the path: from a cut (a teleport, or the cold start;
     // runtime/PathCuts.h) to the first frame without debt. A segment whose every frame has debt
@@ -246,7 +221,7 @@ int runReplay(const ReplayArgs& args) {
         const runtime::FramePageUse& used = access.framePageUse();
         if (used.nodePages + used.geometryPages >= peakUse.pages.nodePages + peakUse.pages.geometryPages)
             peakUse = {used, frame->stats.nodesVisited, frame->stats.trianglesDrawn};
-        const ProcessMemory memory = processMemory();
+        const storage::ProcessMemory memory = storage::readProcessMemory();
         peakMemory.anonBytes = std::max(peakMemory.anonBytes, memory.anonBytes);
         peakMemory.fileBytes = std::max(peakMemory.fileBytes, memory.fileBytes);
         frameMs.push_back(ms);

@@ -7,6 +7,7 @@
 #include "BenchSupport.h"
 #include "Benchmarks.h"
 #include "CameraOptions.h"
+#include "Percentile.h"
 #include "ScenarioParts.h"
 #include "StreamingPages.h"
 
@@ -39,14 +40,6 @@ struct PathParams {
     /** cacheMb 0: every page resident (memory map); else a cold streaming cache per method. */
     CacheSpec cache = {.cacheMb = 0};
 };
-
-double percentile(std::vector<double> values, double p) {
-    if (values.empty())
-        return 0.0;
-    std::sort(values.begin(), values.end());
-    const auto index = static_cast<std::size_t>(std::ceil(p * static_cast<double>(values.size())));
-    return values[std::min(index == 0 ? 0 : index - 1, values.size() - 1)];
-}
 
 Result<runtime::CameraPath> makePath(const PathSpec& p, const runtime::Bounds& bounds) {
     if (p.generator == "flythrough")
