@@ -64,6 +64,8 @@ TEST_F(OutputPathTest, EveryVerbRefusesAMissingOutputFolderBeforeItsWork) {
     expectRefusedUpFront({"bench", FF_BENCH_DIR "/table2.json", "--quick", "--out", (mDir / "tree.ffs" / "results").string()}, (mDir / "tree.ffs").string());
     // Before any window opens, so no display is needed to see it.
     expectRefusedUpFront({"view", scene, "--frames", "1", "--screenshot", missing + ".png"}, missing);
+    expectRefusedUpFront({"view", scene, "--frames", "1", "--screenshot-dir", (mDir / "tree.ffs" / "shots").string()},
+                         (mDir / "tree.ffs").string());
     EXPECT_FALSE(fs::exists(mDir / "ok.png"));
     EXPECT_FALSE(fs::exists(mDir / "b.ffs"));
 }

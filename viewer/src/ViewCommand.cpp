@@ -41,6 +41,7 @@ struct ViewArgs {
     int frames = 0;
     std::string screenshot;
     std::string screenshotDir = ".";
+    CLI::Option* screenshotDirOption = nullptr; ///< given: the folder is checked at start
     std::string script;
     bool noHud = false;
     bool noVsync = false;
@@ -146,8 +147,12 @@ int runView(const ViewArgs& args) {
     auto scriptedScreenshot = reserveIfNamed(args.screenshot, OutputKind::Image);
     if (!scriptedScreenshot)
         return reportError("view", scriptedScreenshot.status().withContext("--screenshot"));
-    if (const Status folder = prepareOutputFolder(args.screenshotDir); !folder)
-        return reportError("view", folder.withContext("--screenshot-dir"));
+    // A folder asked for is made and checked now; the default (the current folder) only when a
+    // screenshot is taken, so that view still starts from a folder it cannot write.
+    if (args.screenshotDirOption != nullptr && args.screenshotDirOption->count() > 0) {
+        if (const Status folder = prepareOutputFolder(args.screenshotDir); !folder)
+            return reportError("view", folder.withContext("--screenshot-dir"));
+    }
 
     auto scene = storage::SceneFile::open(args.scene);
     if (!scene)
@@ -370,9 +375,9 @@ CommandRunner addViewCommand(CLI::App& app) {
             "--screenshot",
             args->screenshot,
             "Write the last frame here (.png, ...) and exit; implies --frames 1 if unset");
-    cmd->add_option(
-               "--screenshot-dir", args->screenshotDir, "Where P/F12 write screenshot-NNNN.png")
-            ->capture_default_str();
+    args->screenshotDirOption =
+            cmd->add_option("--screenshot-dir", args->screenshotDir, "Where P/F12 write screenshot-NNNN.png")
+                    ->capture_default_str();
     cmd->add_option(
             "--script",
             args->script,
