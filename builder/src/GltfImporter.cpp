@@ -10,8 +10,9 @@
 // Vertex colour (linear RGBA) = material baseColorFactor x COLOR_0 x baseColorTexture sampled
 // bilinearly at the vertex's TEXCOORD_<texCoord> (moved by KHR_texture_transform, whose texCoord
 // overrides the reference's), with the texture's sampler wrap modes and its sRGB texels decoded
-// to linear before filtering. KHR_materials_unlit vertices are stored unlit (GltfMaterial.h). A primitive without material, or a material
-// without base colour, is white (glTF's default factor is 1). Normals are passed through in the
+// to linear before filtering. KHR_materials_unlit vertices are stored unlit (GltfMaterial.h).
+// A primitive without material, or a material without base colour, is white (glTF's default
+// factor is 1). Normals are passed through in the
 // mesh's own frame (zero when absent, so packTriangle uses the face normal). Skins and morph
 // targets are ignored: meshes are taken in their rest pose, with a warning.
 
