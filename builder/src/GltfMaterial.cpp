@@ -9,11 +9,17 @@ namespace {
 
 Status invalidTransform(int material, const std::string& what) {
     return {ErrorCode::InvalidInput,
-            "material " + std::to_string(material) + ": " + kTextureTransformExtension + " " + what};
+            "material " + std::to_string(material) + ": " + kTextureTransformExtension + " " +
+                    what};
 }
 
 /** The extension's `key`: absent leaves `out` as it is; else it must be `size` finite numbers. */
-Status readNumbers(const tinygltf::Value& extension, const char* key, std::size_t size, double* out, int material) {
+Status readNumbers(
+        const tinygltf::Value& extension,
+        const char* key,
+        std::size_t size,
+        double* out,
+        int material) {
     if (!extension.Has(key))
         return Status::ok();
     const tinygltf::Value& value = extension.Get(key);
@@ -27,7 +33,8 @@ Status readNumbers(const tinygltf::Value& extension, const char* key, std::size_
         return Status::ok();
     }
     if (!value.IsArray() || value.ArrayLen() != size)
-        return invalidTransform(material, std::string(key) + " must be " + std::to_string(size) + " numbers");
+        return invalidTransform(
+                material, std::string(key) + " must be " + std::to_string(size) + " numbers");
     for (std::size_t i = 0; i < size; ++i) {
         if (!finiteNumber(value.Get(static_cast<int>(i))))
             return invalidTransform(material, std::string(key) + " must be finite numbers");
@@ -43,7 +50,8 @@ glm::vec2 UvTransform::apply(glm::vec2 uv) const noexcept {
     const double s = std::sin(rotation);
     const double u = scale.x * static_cast<double>(uv.x);
     const double v = scale.y * static_cast<double>(uv.y);
-    return {static_cast<float>(c * u + s * v + offset.x), static_cast<float>(-s * u + c * v + offset.y)};
+    return {static_cast<float>(c * u + s * v + offset.x),
+            static_cast<float>(-s * u + c * v + offset.y)};
 }
 
 bool UvTransform::isIdentity() const noexcept {
@@ -70,7 +78,8 @@ Result<BaseColorInput> baseColorInput(const tinygltf::Model& model, int material
     double offset[2] = {0.0, 0.0};
     double scale[2] = {1.0, 1.0};
     FF_RETURN_IF_ERROR(readNumbers(extension, "offset", 2, offset, material));
-    FF_RETURN_IF_ERROR(readNumbers(extension, "rotation", 1, &input.uvTransform.rotation, material));
+    FF_RETURN_IF_ERROR(
+            readNumbers(extension, "rotation", 1, &input.uvTransform.rotation, material));
     FF_RETURN_IF_ERROR(readNumbers(extension, "scale", 2, scale, material));
     input.uvTransform.offset = {offset[0], offset[1]};
     input.uvTransform.scale = {scale[0], scale[1]};
@@ -92,7 +101,8 @@ std::string baseColorKey(const BaseColorInput& input) {
     key << " t" << input.texture << ',' << input.texCoord;
     if (input.texture >= 0 && !input.uvTransform.isIdentity()) {
         const UvTransform& t = input.uvTransform;
-        key << " uv" << t.offset.x << ',' << t.offset.y << ',' << t.rotation << ',' << t.scale.x << ',' << t.scale.y;
+        key << " uv" << t.offset.x << ',' << t.offset.y << ',' << t.rotation << ',' << t.scale.x
+            << ',' << t.scale.y;
     }
     if (input.unlit)
         key << " unlit";

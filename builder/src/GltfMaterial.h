@@ -33,11 +33,11 @@ struct UvTransform {
 };
 
 struct BaseColorInput {
-    glm::vec4 factor{1.0f};    ///< linear RGBA
-    int texture = -1;          ///< textures[] index, -1 for none
-    int texCoord = 0;          ///< TEXCOORD_<n> the texture reads (the transform's override applied)
+    glm::vec4 factor{1.0f}; ///< linear RGBA
+    int texture = -1;       ///< textures[] index, -1 for none
+    int texCoord = 0;       ///< TEXCOORD_<n> the texture reads (the transform's override applied)
     UvTransform uvTransform;
-    bool unlit = false;        ///< KHR_materials_unlit
+    bool unlit = false; ///< KHR_materials_unlit
 };
 
 /**

@@ -29,8 +29,10 @@ TransformMetric::TransformMetric(const glm::mat4& localToWorld) noexcept
     }
 }
 
-float TransformMetric::projectedArea(const glm::vec3& boxMin, const glm::vec3& boxMax,
-                                     const glm::vec3& localEye) const noexcept {
+float TransformMetric::projectedArea(
+        const glm::vec3& boxMin,
+        const glm::vec3& boxMax,
+        const glm::vec3& localEye) const noexcept {
     const glm::vec3 extent = boxMax - boxMin;
     const glm::vec3 toEye = localEye - 0.5f * (boxMin + boxMax);
     const float worldDistance = glm::length(mLinear * toEye);
@@ -40,8 +42,10 @@ float TransformMetric::projectedArea(const glm::vec3& boxMin, const glm::vec3& b
     return mAbsDeterminant * glm::dot(faceAreas, glm::abs(toEye)) / worldDistance;
 }
 
-float TransformMetric::nearestDistance(const glm::vec3& boxMin, const glm::vec3& boxMax,
-                                       const glm::vec3& localEye) const noexcept {
+float TransformMetric::nearestDistance(
+        const glm::vec3& boxMin,
+        const glm::vec3& boxMax,
+        const glm::vec3& localEye) const noexcept {
     // |M d|² = dᵀ G d is separable per axis when G is diagonal: clamping each coordinate of the
     // eye into the box then gives the nearest point.
     glm::vec3 nearest = glm::clamp(localEye, boxMin, boxMax);
@@ -60,7 +64,8 @@ float TransformMetric::nearestDistance(const glm::vec3& boxMin, const glm::vec3&
                     if (j != i)
                         coupling += mGram[j][i] * (nearest[j] - localEye[j]);
                 }
-                const float next = std::clamp(localEye[i] - coupling / mGram[i][i], boxMin[i], boxMax[i]);
+                const float next =
+                        std::clamp(localEye[i] - coupling / mGram[i][i], boxMin[i], boxMax[i]);
                 moved = std::max(moved, std::fabs(next - nearest[i]));
                 nearest[i] = next;
             }

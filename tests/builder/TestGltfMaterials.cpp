@@ -31,12 +31,16 @@ constexpr int kSide = 4;
 
 /** sRGB codes of texel (x, y) of the test texture: every texel differs. */
 std::array<std::uint8_t, 4> texel(int x, int y) {
-    return {static_cast<std::uint8_t>(40 + 60 * x), static_cast<std::uint8_t>(40 + 60 * y), 128, 255};
+    return {static_cast<std::uint8_t>(40 + 60 * x),
+            static_cast<std::uint8_t>(40 + 60 * y),
+            128,
+            255};
 }
 
 fs::path freshDir() {
     const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
-    const fs::path dir = fs::path(FF_TEST_TMP_DIR) / (std::string(info->test_suite_name()) + "." + info->name());
+    const fs::path dir =
+            fs::path(FF_TEST_TMP_DIR) / (std::string(info->test_suite_name()) + "." + info->name());
     fs::remove_all(dir);
     fs::create_directories(dir);
     return dir;
@@ -56,8 +60,12 @@ void writeTexture(const fs::path& path) {
  * texCoord override must not read) and TEXCOORD_1 = `uv1`, textured with dir/texture.png through
  * `textureInfo`, and with `materialExtensions` on the material.
  */
-fs::path writeQuad(const fs::path& dir, const std::array<float, 8>& uv1, const json& textureInfo,
-                   const json& materialExtensions = json::object(), const json& required = json::array()) {
+fs::path writeQuad(
+        const fs::path& dir,
+        const std::array<float, 8>& uv1,
+        const json& textureInfo,
+        const json& materialExtensions = json::object(),
+        const json& required = json::array()) {
     writeTexture(dir / "texture.png");
     const std::vector<float> positions = {0, 0, 0, 1, 0, 0, 0, 1, 0, 1, 1, 0};
     const std::vector<float> uv0(8, 0.9f);
@@ -67,7 +75,9 @@ fs::path writeQuad(const fs::path& dir, const std::array<float, 8>& uv1, const j
     std::memcpy(bin.data() + 48, uv0.data(), 32);
     std::memcpy(bin.data() + 80, uv1.data(), 32);
     std::memcpy(bin.data() + 112, indices.data(), 12);
-    std::ofstream(dir / "quad.bin", std::ios::binary).write(reinterpret_cast<const char*>(bin.data()), static_cast<std::streamsize>(bin.size()));
+    std::ofstream(dir / "quad.bin", std::ios::binary)
+            .write(reinterpret_cast<const char*>(bin.data()),
+                   static_cast<std::streamsize>(bin.size()));
     json material = {{"pbrMetallicRoughness", {{"baseColorTexture", textureInfo}}}};
     if (!materialExtensions.empty())
         material["extensions"] = materialExtensions;
@@ -76,12 +86,21 @@ fs::path writeQuad(const fs::path& dir, const std::array<float, 8>& uv1, const j
             {"scene", 0},
             {"scenes", {{{"nodes", {0}}}}},
             {"nodes", {{{"mesh", 0}}}},
-            {"meshes", {{{"primitives", {{{"attributes", {{"POSITION", 0}, {"TEXCOORD_0", 1}, {"TEXCOORD_1", 2}}}, {"indices", 3}, {"material", 0}}}}}}},
+            {"meshes",
+             {{{"primitives",
+                {{{"attributes", {{"POSITION", 0}, {"TEXCOORD_0", 1}, {"TEXCOORD_1", 2}}},
+                  {"indices", 3},
+                  {"material", 0}}}}}}},
             {"materials", {material}},
             {"textures", {{{"source", 0}}}},
             {"images", {{{"uri", "texture.png"}}}},
             {"accessors",
-             {{{"bufferView", 0}, {"componentType", 5126}, {"count", 4}, {"type", "VEC3"}, {"min", {0, 0, 0}}, {"max", {1, 1, 0}}},
+             {{{"bufferView", 0},
+               {"componentType", 5126},
+               {"count", 4},
+               {"type", "VEC3"},
+               {"min", {0, 0, 0}},
+               {"max", {1, 1, 0}}},
               {{"bufferView", 1}, {"componentType", 5126}, {"count", 4}, {"type", "VEC2"}},
               {{"bufferView", 2}, {"componentType", 5126}, {"count", 4}, {"type", "VEC2"}},
               {{"bufferView", 3}, {"componentType", 5123}, {"count", 6}, {"type", "SCALAR"}}}},
@@ -116,7 +135,8 @@ const storage::PackedVertex& quadVertex(const Imported& imported, int index) {
     const auto& triangles = imported.sink.prototypes().at(0).triangles;
     static constexpr std::array<std::pair<int, int>, 4> kWhere = {{{0, 0}, {0, 1}, {0, 2}, {1, 2}}};
     const auto [triangle, corner] = kWhere[static_cast<std::size_t>(index)];
-    return triangles.at(static_cast<std::size_t>(triangle)).vertices[static_cast<std::size_t>(corner)];
+    return triangles.at(static_cast<std::size_t>(triangle))
+            .vertices[static_cast<std::size_t>(corner)];
 }
 
 // offset (0.25, 0), rotation π/2, scale (0.5, 0.5), texCoord 1. By hand, uv' = T R S uv with
@@ -130,16 +150,24 @@ const storage::PackedVertex& quadVertex(const Imported& imported, int index) {
 // Without the transform (or with the rotation the other way) other texels come out.
 TEST(GltfMaterialTest, TextureTransformMovesTheBaseColourLookupToHandComputedTexels) {
     const fs::path dir = freshDir();
-    const json transform = {{"offset", {0.25, 0.0}}, {"rotation", std::numbers::pi / 2}, {"scale", {0.5, 0.5}}, {"texCoord", 1}};
-    const fs::path path = writeQuad(dir, {0.25f, 0.25f, 0.75f, 0.25f, 0.25f, 1.25f, 1.25f, 0.75f},
-                                    {{"index", 0}, {"extensions", {{"KHR_texture_transform", transform}}}}, json::object(),
-                                    {"KHR_texture_transform"});
+    const json transform = {
+            {"offset", {0.25, 0.0}},
+            {"rotation", std::numbers::pi / 2},
+            {"scale", {0.5, 0.5}},
+            {"texCoord", 1}};
+    const fs::path path = writeQuad(
+            dir,
+            {0.25f, 0.25f, 0.75f, 0.25f, 0.25f, 1.25f, 1.25f, 0.75f},
+            {{"index", 0}, {"extensions", {{"KHR_texture_transform", transform}}}},
+            json::object(),
+            {"KHR_texture_transform"});
     const auto imported = importFile(path);
     ASSERT_TRUE(imported->result.isOk()) << imported->result.status().toString();
     const std::array<std::array<int, 2>, 4> expected = {{{1, 3}, {1, 2}, {3, 3}, {2, 1}}};
     for (int v = 0; v < 4; ++v) {
         SCOPED_TRACE("vertex " + std::to_string(v));
-        const auto want = texel(expected[static_cast<std::size_t>(v)][0], expected[static_cast<std::size_t>(v)][1]);
+        const auto want = texel(
+                expected[static_cast<std::size_t>(v)][0], expected[static_cast<std::size_t>(v)][1]);
         const auto& got = quadVertex(*imported, v).color;
         for (std::size_t c = 0; c < 4; ++c)
             EXPECT_NEAR(got[c], want[c], 1) << "channel " << c;
@@ -149,14 +177,20 @@ TEST(GltfMaterialTest, TextureTransformMovesTheBaseColourLookupToHandComputedTex
 
 TEST(GltfMaterialTest, TextureTransformWithBadValuesIsRefusedWithItsName) {
     const fs::path dir = freshDir();
-    for (const json& transform : {json{{"scale", {1.0}}}, json{{"rotation", "a lot"}}, json{{"offset", {0, "x"}}},
-                                  json{{"texCoord", -1}}}) {
+    for (const json& transform :
+         {json{{"scale", {1.0}}},
+          json{{"rotation", "a lot"}},
+          json{{"offset", {0, "x"}}},
+          json{{"texCoord", -1}}}) {
         SCOPED_TRACE(transform.dump());
-        const fs::path path = writeQuad(dir, {}, {{"index", 0}, {"extensions", {{"KHR_texture_transform", transform}}}});
+        const fs::path path = writeQuad(
+                dir, {}, {{"index", 0}, {"extensions", {{"KHR_texture_transform", transform}}}});
         const auto imported = importFile(path);
         ASSERT_FALSE(imported->result.isOk());
         EXPECT_EQ(imported->result.status().code(), ErrorCode::InvalidInput);
-        EXPECT_NE(imported->result.status().message().find("KHR_texture_transform"), std::string::npos)
+        EXPECT_NE(
+                imported->result.status().message().find("KHR_texture_transform"),
+                std::string::npos)
                 << imported->result.status().toString();
     }
 }
@@ -177,8 +211,14 @@ TEST(GltfMaterialTest, UvTransformIsTranslationRotationScaleInThatOrder) {
 // and the cube baker then skip the light); the same model without the extension is lit.
 TEST(GltfMaterialTest, UnlitMaterialsGiveUnlitVertices) {
     const fs::path dir = freshDir();
-    const std::array<float, 8> uv = {0.125f, 0.125f, 0.375f, 0.125f, 0.125f, 0.375f, 0.375f, 0.375f};
-    const auto unlit = importFile(writeQuad(dir, uv, {{"index", 0}}, {{"KHR_materials_unlit", json::object()}}, {"KHR_materials_unlit"}));
+    const std::array<float, 8> uv = {
+            0.125f, 0.125f, 0.375f, 0.125f, 0.125f, 0.375f, 0.375f, 0.375f};
+    const auto unlit = importFile(writeQuad(
+            dir,
+            uv,
+            {{"index", 0}},
+            {{"KHR_materials_unlit", json::object()}},
+            {"KHR_materials_unlit"}));
     ASSERT_TRUE(unlit->result.isOk()) << unlit->result.status().toString();
     for (int v = 0; v < 4; ++v)
         EXPECT_TRUE(storage::isUnlitNormal(quadVertex(*unlit, v).normalOct)) << "vertex " << v;

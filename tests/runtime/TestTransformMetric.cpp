@@ -5,9 +5,8 @@
 
 #include <ff/runtime/TransformMetric.h>
 
-#include <gtest/gtest.h>
-
 #include <glm/gtc/matrix_transform.hpp>
+#include <gtest/gtest.h>
 
 #include <algorithm>
 #include <cmath>
@@ -44,8 +43,13 @@ double hullArea(std::vector<glm::dvec2> points) {
 }
 
 /** The silhouette of the world parallelepiped seen along the world direction centre -> eye. */
-double silhouetteArea(const glm::mat4& single, const glm::vec3& lo, const glm::vec3& hi, const glm::vec3& localEye) {
-    const glm::dmat4 m(single); // in double: a 0.004 thick slab's corners would lose digits in float
+double silhouetteArea(
+        const glm::mat4& single,
+        const glm::vec3& lo,
+        const glm::vec3& hi,
+        const glm::vec3& localEye) {
+    const glm::dmat4 m(
+            single); // in double: a 0.004 thick slab's corners would lose digits in float
     const glm::dvec3 eye(m * glm::dvec4(localEye, 1.0));
     const glm::dvec3 centre(m * glm::dvec4(glm::dvec3(0.5f * (lo + hi)), 1.0));
     const glm::dvec3 d = glm::normalize(eye - centre);
@@ -62,14 +66,21 @@ double silhouetteArea(const glm::mat4& single, const glm::vec3& lo, const glm::v
 }
 
 /** Minimum world distance over a (steps+1)³ grid of the box's points. */
-double gridNearest(const glm::mat4& m, const glm::vec3& lo, const glm::vec3& hi, const glm::vec3& localEye, int steps) {
+double gridNearest(
+        const glm::mat4& m,
+        const glm::vec3& lo,
+        const glm::vec3& hi,
+        const glm::vec3& localEye,
+        int steps) {
     const glm::dvec3 eye(m * glm::vec4(localEye, 1.0f));
     double best = INFINITY;
     for (int i = 0; i <= steps; ++i)
         for (int j = 0; j <= steps; ++j)
             for (int k = 0; k <= steps; ++k) {
-                const glm::vec3 t(static_cast<float>(i) / static_cast<float>(steps), static_cast<float>(j) / static_cast<float>(steps),
-                                  static_cast<float>(k) / static_cast<float>(steps));
+                const glm::vec3 t(
+                        static_cast<float>(i) / static_cast<float>(steps),
+                        static_cast<float>(j) / static_cast<float>(steps),
+                        static_cast<float>(k) / static_cast<float>(steps));
                 const glm::dvec3 world(m * glm::vec4(lo + t * (hi - lo), 1.0f));
                 best = std::min(best, glm::length(world - eye));
             }
@@ -88,12 +99,15 @@ std::vector<Case> cases() {
     const glm::mat4 turn = glm::rotate(glm::mat4(1.0f), 0.7f, glm::normalize(glm::vec3(1, 2, 3)));
     return {
             {"identity", glm::mat4(1.0f)},
-            {"uniform scale and turn", glm::translate(glm::mat4(1.0f), {1, 2, 3}) * turn * glm::scale(glm::mat4(1.0f), glm::vec3(3.0f))},
+            {"uniform scale and turn",
+             glm::translate(glm::mat4(1.0f), {1, 2, 3}) * turn *
+                     glm::scale(glm::mat4(1.0f), glm::vec3(3.0f))},
             {"slab (10, 0.004, 1)", glm::scale(glm::mat4(1.0f), {10.0f, 0.004f, 1.0f})},
             {"turned slab", turn * glm::scale(glm::mat4(1.0f), {0.004f, 10.0f, 1.0f})},
             {"mirrored", glm::scale(glm::mat4(1.0f), {-2.0f, 0.5f, 1.0f})},
             {"sheared", sheared},
-            {"sheared and turned", turn * sheared * glm::scale(glm::mat4(1.0f), {4.0f, 0.1f, 1.0f})},
+            {"sheared and turned",
+             turn * sheared * glm::scale(glm::mat4(1.0f), {4.0f, 0.1f, 1.0f})},
     };
 }
 
@@ -105,8 +119,14 @@ TEST(TransformMetricTest, ProjectedAreaIsTheWorldSilhouette) {
         const TransformMetric metric(c.transform);
         for (int trial = 0; trial < 50; ++trial) {
             const glm::vec3 lo(coordinate(random), coordinate(random), coordinate(random));
-            const glm::vec3 hi = lo + glm::vec3(0.1f + std::fabs(coordinate(random)), 0.2f, 0.1f + std::fabs(coordinate(random)));
-            const glm::vec3 eye(coordinate(random) * 4.0f, coordinate(random) * 4.0f, coordinate(random) * 4.0f);
+            const glm::vec3 hi = lo + glm::vec3(
+                                              0.1f + std::fabs(coordinate(random)),
+                                              0.2f,
+                                              0.1f + std::fabs(coordinate(random)));
+            const glm::vec3 eye(
+                    coordinate(random) * 4.0f,
+                    coordinate(random) * 4.0f,
+                    coordinate(random) * 4.0f);
             const double expected = silhouetteArea(c.transform, lo, hi, eye);
             EXPECT_NEAR(metric.projectedArea(lo, hi, eye), expected, 1e-4 * expected + 1e-7);
         }
@@ -124,7 +144,10 @@ TEST(TransformMetricTest, NearestDistanceIsTheWorldMinimumOverTheBox) {
         for (int trial = 0; trial < 12; ++trial) {
             const glm::vec3 lo(coordinate(random), coordinate(random), coordinate(random));
             const glm::vec3 hi = lo + glm::vec3(0.5f, 1.0f, 1.5f);
-            const glm::vec3 eye(coordinate(random) * 3.0f, coordinate(random) * 3.0f, coordinate(random) * 3.0f);
+            const glm::vec3 eye(
+                    coordinate(random) * 3.0f,
+                    coordinate(random) * 3.0f,
+                    coordinate(random) * 3.0f);
             const double grid = gridNearest(c.transform, lo, hi, eye, kSteps);
             const glm::vec3 step = (hi - lo) / static_cast<float>(kSteps);
             const double slack = 0.5 * glm::length(glm::mat3(c.transform) * step) + 1e-5;
@@ -138,7 +161,11 @@ TEST(TransformMetricTest, NearestDistanceIsTheWorldMinimumOverTheBox) {
 TEST(TransformMetricTest, AnEyeInsideTheBoxIsAtDistanceZero) {
     for (const Case& c : cases()) {
         SCOPED_TRACE(c.name);
-        EXPECT_EQ(TransformMetric(c.transform).nearestDistance(glm::vec3(-1.0f), glm::vec3(1.0f), glm::vec3(0.2f, -0.3f, 0.9f)), 0.0f);
+        EXPECT_EQ(
+                TransformMetric(c.transform)
+                        .nearestDistance(
+                                glm::vec3(-1.0f), glm::vec3(1.0f), glm::vec3(0.2f, -0.3f, 0.9f)),
+                0.0f);
     }
 }
 
@@ -147,10 +174,14 @@ TEST(TransformMetricTest, AnEyeInsideTheBoxIsAtDistanceZero) {
 TEST(TransformMetricTest, ASlabFaceOnCoversItsWorldFace) {
     const TransformMetric metric(glm::scale(glm::mat4(1.0f), {10.0f, 0.004f, 1.0f}));
     const glm::vec3 eye(0.0f, 0.0f, 100.0f); // along z: the slab's 10 x 0.004 edge
-    EXPECT_NEAR(metric.projectedArea(glm::vec3(-0.5f), glm::vec3(0.5f), eye), 10.0f * 0.004f, 1e-6f);
+    EXPECT_NEAR(
+            metric.projectedArea(glm::vec3(-0.5f), glm::vec3(0.5f), eye), 10.0f * 0.004f, 1e-6f);
     const glm::vec3 above(0.0f, 100.0f / 0.004f, 0.0f); // 100 world units above: the 10 x 1 face
     EXPECT_NEAR(metric.projectedArea(glm::vec3(-0.5f), glm::vec3(0.5f), above), 10.0f, 1e-4f);
-    EXPECT_NEAR(metric.nearestDistance(glm::vec3(-0.5f), glm::vec3(0.5f), above), 100.0f - 0.002f, 1e-3f);
+    EXPECT_NEAR(
+            metric.nearestDistance(glm::vec3(-0.5f), glm::vec3(0.5f), above),
+            100.0f - 0.002f,
+            1e-3f);
 }
 
 } // namespace

@@ -14,11 +14,10 @@
 #include <ff/runtime/ImageMetrics.h>
 #include <ff/storage/VertexCodec.h>
 
-#include <gtest/gtest.h>
-
 #include <glm/glm.hpp>
 #include <glm/gtc/matrix_transform.hpp>
 #include <glm/gtc/type_ptr.hpp>
+#include <gtest/gtest.h>
 
 #include <array>
 #include <cmath>
@@ -62,13 +61,20 @@ std::vector<unsigned char> unitBoxBuffer(std::size_t& vertexCount, std::size_t& 
             }
             for (int j = 0; j < n; ++j) {
                 for (int i = 0; i < n; ++i) {
-                    const auto at = [&](int di, int dj) { return static_cast<std::uint16_t>(base + (j + dj) * (n + 1) + i + di); };
-                    // (u, v) = (axis + 1, axis + 2) is right-handed with the axis: counter-clockwise
-                    // seen from outside on the + side, so the - side flips the winding.
+                    const auto at = [&](int di, int dj) {
+                        return static_cast<std::uint16_t>(base + (j + dj) * (n + 1) + i + di);
+                    };
+                    // (u, v) = (axis + 1, axis + 2) is right-handed with the axis:
+                    // counter-clockwise seen from outside on the + side, so the - side flips the
+                    // winding.
                     if (side)
-                        indices.insert(indices.end(), {at(0, 0), at(1, 0), at(1, 1), at(0, 0), at(1, 1), at(0, 1)});
+                        indices.insert(
+                                indices.end(),
+                                {at(0, 0), at(1, 0), at(1, 1), at(0, 0), at(1, 1), at(0, 1)});
                     else
-                        indices.insert(indices.end(), {at(0, 0), at(1, 1), at(1, 0), at(0, 0), at(0, 1), at(1, 1)});
+                        indices.insert(
+                                indices.end(),
+                                {at(0, 0), at(1, 1), at(1, 0), at(0, 0), at(0, 1), at(1, 1)});
                 }
             }
         }
@@ -88,9 +94,13 @@ const json kRedLit = {{"pbrMetallicRoughness", {{"baseColorFactor", {0.8, 0.1, 0
  * of a parent node with `parent` as its matrix) and, if `withBackdrop`, a grey backdrop box,
  * 12 x 12 x 0.5, at z = -3.
  */
-fs::path writeSlabScene(const fs::path& dir, const std::string& name, const glm::mat4& parent,
-                        const std::vector<glm::mat4>& slabs, const json& slabMaterial = kRedLit,
-                        bool withBackdrop = true) {
+fs::path writeSlabScene(
+        const fs::path& dir,
+        const std::string& name,
+        const glm::mat4& parent,
+        const std::vector<glm::mat4>& slabs,
+        const json& slabMaterial = kRedLit,
+        bool withBackdrop = true) {
     std::size_t vertexCount = 0;
     std::size_t indexCount = 0;
     const std::vector<unsigned char> buffer = unitBoxBuffer(vertexCount, indexCount);
@@ -101,7 +111,8 @@ fs::path writeSlabScene(const fs::path& dir, const std::string& name, const glm:
         nodes.push_back({{"mesh", 0}, {"matrix", matrixOf(slabs[i])}});
         children.push_back(i);
     }
-    const glm::mat4 backdrop = glm::scale(glm::translate(glm::mat4(1.0f), {0.0f, 0.0f, -3.0f}), {12.0f, 12.0f, 0.5f});
+    const glm::mat4 backdrop =
+            glm::scale(glm::translate(glm::mat4(1.0f), {0.0f, 0.0f, -3.0f}), {12.0f, 12.0f, 0.5f});
     nodes.push_back({{"mesh", 1}, {"matrix", matrixOf(backdrop)}});
     nodes.push_back({{"children", children}, {"matrix", matrixOf(parent)}});
     const json roots = withBackdrop ? json{slabs.size(), slabs.size() + 1} : json{slabs.size() + 1};
@@ -113,13 +124,21 @@ fs::path writeSlabScene(const fs::path& dir, const std::string& name, const glm:
             {"scene", 0},
             {"scenes", {{{"nodes", roots}}}},
             {"nodes", nodes},
-            {"materials", {slabMaterial, {{"pbrMetallicRoughness", {{"baseColorFactor", {0.5, 0.5, 0.5, 1.0}}}}}}},
-            {"meshes",
-             {{{"primitives", {primitive(0)}}}, {{"primitives", {primitive(1)}}}}},
+            {"materials",
+             {slabMaterial,
+              {{"pbrMetallicRoughness", {{"baseColorFactor", {0.5, 0.5, 0.5, 1.0}}}}}}},
+            {"meshes", {{{"primitives", {primitive(0)}}}, {{"primitives", {primitive(1)}}}}},
             {"accessors",
-             {{{"bufferView", 0}, {"componentType", 5126}, {"count", vertexCount}, {"type", "VEC3"},
-               {"min", {-0.5, -0.5, -0.5}}, {"max", {0.5, 0.5, 0.5}}},
-              {{"bufferView", 1}, {"componentType", 5123}, {"count", indexCount}, {"type", "SCALAR"}}}},
+             {{{"bufferView", 0},
+               {"componentType", 5126},
+               {"count", vertexCount},
+               {"type", "VEC3"},
+               {"min", {-0.5, -0.5, -0.5}},
+               {"max", {0.5, 0.5, 0.5}}},
+              {{"bufferView", 1},
+               {"componentType", 5123},
+               {"count", indexCount},
+               {"type", "SCALAR"}}}},
             {"bufferViews",
              {{{"buffer", 0}, {"byteOffset", 0}, {"byteLength", vertexCount * 12}},
               {{"buffer", 0}, {"byteOffset", vertexCount * 12}, {"byteLength", indexCount * 2}}}},
@@ -131,38 +150,59 @@ fs::path writeSlabScene(const fs::path& dir, const std::string& name, const glm:
 
 /** `count` slabs: `shape` (the slab's own matrix) placed `spacing` apart along `stackAxis`,
  *  centred on the origin. */
-std::vector<glm::mat4> stack(int count, float spacing, const glm::vec3& stackAxis, const glm::mat4& shape) {
+std::vector<glm::mat4>
+stack(int count, float spacing, const glm::vec3& stackAxis, const glm::mat4& shape) {
     std::vector<glm::mat4> slabs;
     for (int i = 0; i < count; ++i) {
-        const float offset = (static_cast<float>(i) - 0.5f * static_cast<float>(count - 1)) * spacing;
+        const float offset =
+                (static_cast<float>(i) - 0.5f * static_cast<float>(count - 1)) * spacing;
         slabs.push_back(glm::translate(glm::mat4(1.0f), offset * stackAxis) * shape);
     }
     return slabs;
 }
 
-glm::mat4 scaling(float x, float y, float z) { return glm::scale(glm::mat4(1.0f), {x, y, z}); }
+glm::mat4 scaling(float x, float y, float z) {
+    return glm::scale(glm::mat4(1.0f), {x, y, z});
+}
 
 struct TransformCase {
     const char* name;
     glm::mat4 parent;
     std::vector<glm::mat4> slabs;
-    double minimumDefaultPsnr; ///< at the near view: an absolute floor where the issue set one, else 0
+    double minimumDefaultPsnr; ///< at the near view: an absolute floor where the issue set one,
+                               ///< else 0
 };
 
 std::vector<TransformCase> transformCases() {
     const glm::vec3 x(1, 0, 0), y(0, 1, 0), z(0, 0, 1);
     glm::mat4 shear = scaling(10.0f, 0.004f, 1.0f);
     shear[2] = glm::vec4(0.6f, 0.0f, 1.0f, 0.0f); // the slab's z axis leans towards +x
-    const glm::mat4 turned = glm::rotate(glm::mat4(1.0f), glm::radians(35.0f), glm::normalize(glm::vec3(1, 2, 0.5f)));
+    const glm::mat4 turned = glm::rotate(
+            glm::mat4(1.0f), glm::radians(35.0f), glm::normalize(glm::vec3(1, 2, 0.5f)));
     return {
             // The blind of issue 13, exactly: 13.3 dB before the fix, 33.4 dB with faces.
-            {"blind, y thin", glm::mat4(1.0f), stack(200, 0.05f, y, scaling(10.0f, 0.004f, 1.0f)), 32.4},
-            {"blind, x thin", glm::mat4(1.0f), stack(200, 0.05f, x, scaling(0.004f, 10.0f, 1.0f)), 0.0},
-            {"blind, z thin", glm::mat4(1.0f), stack(200, 0.05f, z, scaling(10.0f, 1.0f, 0.004f)), 0.0},
-            {"mirrored", glm::mat4(1.0f), stack(200, 0.05f, y, scaling(-10.0f, 0.004f, -1.0f)), 0.0},
+            {"blind, y thin",
+             glm::mat4(1.0f),
+             stack(200, 0.05f, y, scaling(10.0f, 0.004f, 1.0f)),
+             32.4},
+            {"blind, x thin",
+             glm::mat4(1.0f),
+             stack(200, 0.05f, x, scaling(0.004f, 10.0f, 1.0f)),
+             0.0},
+            {"blind, z thin",
+             glm::mat4(1.0f),
+             stack(200, 0.05f, z, scaling(10.0f, 1.0f, 0.004f)),
+             0.0},
+            {"mirrored",
+             glm::mat4(1.0f),
+             stack(200, 0.05f, y, scaling(-10.0f, 0.004f, -1.0f)),
+             0.0},
             {"sheared", glm::mat4(1.0f), stack(200, 0.05f, y, shear), 0.0},
             // A rotated, non-uniformly scaled parent over non-uniformly scaled children.
-            {"nested scales", turned * scaling(5.0f, 1.0f, 0.5f), stack(200, 0.05f, y, scaling(2.0f, 0.004f, 2.0f)), 0.0},
+            {"nested scales",
+             turned * scaling(5.0f, 1.0f, 0.5f),
+             stack(200, 0.05f, y, scaling(2.0f, 0.004f, 2.0f)),
+             0.0},
     };
 }
 
@@ -180,29 +220,45 @@ TEST(CubeDrawTransformTest, PointsMatchFacesUnderNonUniformMirroredShearedAndNes
         SCOPED_TRACE(c.name);
         const fs::path gltf = writeSlabScene(dir, "slabs", c.parent, c.slabs);
         const fs::path scene = dir / "slabs.ffs";
-        const ProcessResult built = runFarfield({"build", "-q", gltf.string(), "-o", scene.string()}, dir);
+        const ProcessResult built =
+                runFarfield({"build", "-q", gltf.string(), "-o", scene.string()}, dir);
         ASSERT_EQ(built.exitCode, 0) << built.describe();
         // Near (the view of issue 13: every slab is refined to its triangles once the ε rule
         // measures it in world units) and far (100 radii: slabs are sub-pixel cubes, drawn as
         // points whose size must come from the whole transform).
         for (const char* distance : {"2.5", "100"}) {
             SCOPED_TRACE(std::string("distance ") + distance);
-            const std::vector<std::string> view = {"--size", "320x240", "--distance", distance, "--azimuth", "30", "--elevation", "20"};
+            const std::vector<std::string> view = {
+                    "--size",
+                    "320x240",
+                    "--distance",
+                    distance,
+                    "--azimuth",
+                    "30",
+                    "--elevation",
+                    "20"};
             auto render = [&](const std::string& name, std::vector<std::string> flags) {
-                std::vector<std::string> args = {"render", scene.string(), "-o", (dir / name).string()};
+                std::vector<std::string> args = {
+                        "render", scene.string(), "-o", (dir / name).string()};
                 args.insert(args.end(), view.begin(), view.end());
                 args.insert(args.end(), flags.begin(), flags.end());
                 const ProcessResult r = runFarfield(args, dir);
                 EXPECT_EQ(r.exitCode, 0) << r.describe();
                 return decodeImage(dir / name);
             };
-            const runtime::Image reference = render("reference.png", {"--method", "full", "--supersample", "4"});
+            const runtime::Image reference =
+                    render("reference.png", {"--method", "full", "--supersample", "4"});
             ASSERT_EQ(reference.width, 320);
             const double faces = psnr(render("faces.png", {"--cube-draw", "faces"}), reference);
             const double points = psnr(render("points.png", {"--cube-draw", "points"}), reference);
             const double automatic = psnr(render("auto.png", {}), reference);
-            std::printf("%-14s at %5s radii: faces %.2f dB, points %.2f dB, auto %.2f dB\n", c.name, distance, faces,
-                        points, automatic);
+            std::printf(
+                    "%-14s at %5s radii: faces %.2f dB, points %.2f dB, auto %.2f dB\n",
+                    c.name,
+                    distance,
+                    faces,
+                    points,
+                    automatic);
             EXPECT_GE(points, faces - 1.0);
             EXPECT_GE(automatic, faces - 1.0);
             if (std::string(distance) == "2.5") {
@@ -214,15 +270,26 @@ TEST(CubeDrawTransformTest, PointsMatchFacesUnderNonUniformMirroredShearedAndNes
 
 fs::path buildSlabScene(const fs::path& dir, const fs::path& gltf) {
     const fs::path scene = dir / (gltf.stem().string() + ".ffs");
-    const ProcessResult built = runFarfield({"build", "-q", gltf.string(), "-o", scene.string()}, dir);
+    const ProcessResult built =
+            runFarfield({"build", "-q", gltf.string(), "-o", scene.string()}, dir);
     EXPECT_EQ(built.exitCode, 0) << built.describe();
     return scene;
 }
 
 /** The centre pixel of `scene` rendered 160x120 straight down -z from 3 units, with `flags`. */
-std::array<std::uint8_t, 4> centrePixel(const fs::path& dir, const fs::path& scene, std::vector<std::string> flags) {
-    std::vector<std::string> args = {"render", scene.string(), "-o", (dir / "centre.png").string(), "--size", "160x120",
-                                     "--eye", "0,0,3", "--target", "0,0,0"};
+std::array<std::uint8_t, 4>
+centrePixel(const fs::path& dir, const fs::path& scene, std::vector<std::string> flags) {
+    std::vector<std::string> args = {
+            "render",
+            scene.string(),
+            "-o",
+            (dir / "centre.png").string(),
+            "--size",
+            "160x120",
+            "--eye",
+            "0,0,3",
+            "--target",
+            "0,0,0"};
     args.insert(args.end(), flags.begin(), flags.end());
     const ProcessResult r = runFarfield(args, dir);
     EXPECT_EQ(r.exitCode, 0) << r.describe();
@@ -242,10 +309,14 @@ TEST(UnlitMaterialTest, UnlitSurfacesShowTheirBaseColourAsTrianglesAndAsCubes) {
     const std::vector<glm::mat4> slab = {scaling(4.0f, 4.0f, 0.1f)};
     json unlitMaterial = kRedLit;
     unlitMaterial["extensions"] = {{"KHR_materials_unlit", json::object()}};
-    const fs::path lit = buildSlabScene(dir, writeSlabScene(dir, "lit", glm::mat4(1.0f), slab, kRedLit, false));
-    const fs::path unlit = buildSlabScene(dir, writeSlabScene(dir, "unlit", glm::mat4(1.0f), slab, unlitMaterial, false));
-    const std::array<std::uint8_t, 3> base = {storage::linearToSrgb8(0.8f), storage::linearToSrgb8(0.1f),
-                                              storage::linearToSrgb8(0.1f)};
+    const fs::path lit =
+            buildSlabScene(dir, writeSlabScene(dir, "lit", glm::mat4(1.0f), slab, kRedLit, false));
+    const fs::path unlit = buildSlabScene(
+            dir, writeSlabScene(dir, "unlit", glm::mat4(1.0f), slab, unlitMaterial, false));
+    const std::array<std::uint8_t, 3> base = {
+            storage::linearToSrgb8(0.8f),
+            storage::linearToSrgb8(0.1f),
+            storage::linearToSrgb8(0.1f)};
 
     const auto triangles = centrePixel(dir, unlit, {"--epsilon", "0"});
     EXPECT_EQ(triangles[0], base[0]);

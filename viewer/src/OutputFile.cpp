@@ -2,13 +2,14 @@
 
 #include "ImageOutput.h"
 
+#include <fcntl.h>
+#include <unistd.h>
+
 #include <cerrno>
 #include <cstring>
-#include <fcntl.h>
 #include <fstream>
 #include <string>
 #include <system_error>
-#include <unistd.h>
 #include <utility>
 
 namespace ff::viewer {
@@ -18,7 +19,8 @@ namespace fs = std::filesystem;
 namespace {
 
 Status ioError(const fs::path& path, int error) {
-    return Status(ErrorCode::IoError, "cannot write " + path.string() + ": " + std::strerror(error));
+    return Status(
+            ErrorCode::IoError, "cannot write " + path.string() + ": " + std::strerror(error));
 }
 
 /** Creates `path` empty (it must not exist yet), or says why it cannot. */
@@ -34,17 +36,20 @@ Status createExclusive(const fs::path& path, const fs::path& reported) {
 
 Result<PendingOutput> PendingOutput::reserve(const fs::path& path, OutputKind kind) {
     if (path.empty() || !path.has_filename())
-        return Status(ErrorCode::InvalidArgument, "output path '" + path.string() + "' names no file");
+        return Status(
+                ErrorCode::InvalidArgument, "output path '" + path.string() + "' names no file");
     std::error_code error;
     if (fs::is_directory(path, error))
         return Status(ErrorCode::InvalidArgument, "output " + path.string() + " is a folder");
     const fs::path folder = path.has_parent_path() ? path.parent_path() : fs::path(".");
     if (!fs::is_directory(folder, error))
-        return Status(ErrorCode::NotFound, "output directory " + folder.string() + " does not exist");
+        return Status(
+                ErrorCode::NotFound, "output directory " + folder.string() + " does not exist");
     if (kind == OutputKind::Image)
         FF_RETURN_IF_ERROR(checkImageFormat(path));
-    const fs::path temporary = folder / ("." + path.stem().string() + "." + std::to_string(::getpid()) + ".tmp" +
-                                         path.extension().string());
+    const fs::path temporary =
+            folder / ("." + path.stem().string() + "." + std::to_string(::getpid()) + ".tmp" +
+                      path.extension().string());
     FF_RETURN_IF_ERROR(createExclusive(temporary, path));
     return PendingOutput(path, temporary);
 }
@@ -66,7 +71,9 @@ PendingOutput& PendingOutput::operator=(PendingOutput&& other) noexcept {
     return *this;
 }
 
-PendingOutput::~PendingOutput() { discard(); }
+PendingOutput::~PendingOutput() {
+    discard();
+}
 
 void PendingOutput::discard() noexcept {
     if (!mTemporary.empty()) {
@@ -98,7 +105,8 @@ Status PendingOutput::commit() {
     std::error_code error;
     fs::rename(mTemporary, mPath, error);
     if (error)
-        return Status(ErrorCode::IoError, "cannot write " + mPath.string() + ": " + error.message());
+        return Status(
+                ErrorCode::IoError, "cannot write " + mPath.string() + ": " + error.message());
     mTemporary.clear();
     return Status::ok();
 }
@@ -114,8 +122,10 @@ Status prepareOutputFolder(const fs::path& folder) {
     std::error_code error;
     fs::create_directories(folder, error);
     if (error || !fs::is_directory(folder, error))
-        return Status(ErrorCode::IoError, "cannot create folder " + folder.string() +
-                                                  (error ? ": " + error.message() : std::string()));
+        return Status(
+                ErrorCode::IoError,
+                "cannot create folder " + folder.string() +
+                        (error ? ": " + error.message() : std::string()));
     const fs::path probe = folder / (".farfield-probe." + std::to_string(::getpid()));
     FF_RETURN_IF_ERROR(createExclusive(probe, folder));
     fs::remove(probe, error);

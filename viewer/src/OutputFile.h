@@ -28,7 +28,8 @@ class PendingOutput {
 public:
     /** Fails (NotFound, InvalidArgument, IoError) if the folder is missing, the path names a
      *  folder, the image format is unknown or the folder is not writable. */
-    [[nodiscard]] static Result<PendingOutput> reserve(const std::filesystem::path& path, OutputKind kind);
+    [[nodiscard]] static Result<PendingOutput>
+    reserve(const std::filesystem::path& path, OutputKind kind);
 
     PendingOutput(PendingOutput&& other) noexcept;
     PendingOutput& operator=(PendingOutput&& other) noexcept;
@@ -56,7 +57,8 @@ private:
 };
 
 /** reserve() for an optional flag's path: no output where the path is empty. */
-[[nodiscard]] Result<std::optional<PendingOutput>> reserveIfNamed(const std::filesystem::path& path, OutputKind kind);
+[[nodiscard]] Result<std::optional<PendingOutput>>
+reserveIfNamed(const std::filesystem::path& path, OutputKind kind);
 
 /**
  * A folder that will receive many files (replay's frames, bench results, view's screenshots):

@@ -11,7 +11,8 @@ double percentile(std::vector<double> values, double p) {
         return 0.0;
     std::sort(values.begin(), values.end());
     // Rank ceil(p n), from 1; p = 0 asks for rank 0, which is the first value too.
-    const auto rank = static_cast<std::size_t>(std::ceil(std::clamp(p, 0.0, 1.0) * static_cast<double>(values.size())));
+    const auto rank = static_cast<std::size_t>(
+            std::ceil(std::clamp(p, 0.0, 1.0) * static_cast<double>(values.size())));
     return values[std::min(rank == 0 ? 0 : rank - 1, values.size() - 1)];
 }
 

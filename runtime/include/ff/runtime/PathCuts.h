@@ -26,7 +26,9 @@ inline constexpr double kCutStepRatio = 4.0;
  * move at all; an orbit's or a fly-through's steps change smoothly and never cut. Eyes are
  * sampled relative to `frameOrigin` (the scene file's origin), where floats keep their precision.
  */
-[[nodiscard]] std::vector<bool> findPathCuts(const CameraPath& path, double sceneRadius,
-                                             const glm::dvec3& frameOrigin = glm::dvec3(0.0));
+[[nodiscard]] std::vector<bool> findPathCuts(
+        const CameraPath& path,
+        double sceneRadius,
+        const glm::dvec3& frameOrigin = glm::dvec3(0.0));
 
 } // namespace ff::runtime

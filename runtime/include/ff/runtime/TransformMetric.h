@@ -27,8 +27,10 @@ public:
      * A local face with area vector a maps to cof(M) a = det(M) M⁻ᵀ a, so its projection onto a
      * world unit vector d = M t / |M t| (t = eye - centre, local) is |det M| |a · t| / |M t|.
      */
-    [[nodiscard]] float projectedArea(const glm::vec3& boxMin, const glm::vec3& boxMax,
-                                      const glm::vec3& localEye) const noexcept;
+    [[nodiscard]] float projectedArea(
+            const glm::vec3& boxMin,
+            const glm::vec3& boxMax,
+            const glm::vec3& localEye) const noexcept;
 
     /**
      * World distance from the eye to the nearest point of the box (0 inside): the minimum of
@@ -36,8 +38,10 @@ public:
      * orthogonal — any rotation with per-axis scale, mirrored or not; otherwise (shear) found
      * by coordinate descent on the convex quadratic, which converges to the minimum.
      */
-    [[nodiscard]] float nearestDistance(const glm::vec3& boxMin, const glm::vec3& boxMax,
-                                        const glm::vec3& localEye) const noexcept;
+    [[nodiscard]] float nearestDistance(
+            const glm::vec3& boxMin,
+            const glm::vec3& boxMax,
+            const glm::vec3& localEye) const noexcept;
 
     /** Squared world length of the local vector v (orders children by world distance). */
     [[nodiscard]] float worldLengthSquared(const glm::vec3& v) const noexcept {
@@ -46,10 +50,10 @@ public:
     }
 
 private:
-    glm::mat3 mLinear;         ///< the transform's linear part M
-    glm::mat3 mGram;           ///< Mᵀ M: |M v|² = vᵀ (Mᵀ M) v
-    float mAbsDeterminant;     ///< |det M|: local volume to world volume
-    bool mOrthogonalColumns;   ///< Mᵀ M is diagonal: no shear, clamping is exact
+    glm::mat3 mLinear;       ///< the transform's linear part M
+    glm::mat3 mGram;         ///< Mᵀ M: |M v|² = vᵀ (Mᵀ M) v
+    float mAbsDeterminant;   ///< |det M|: local volume to world volume
+    bool mOrthogonalColumns; ///< Mᵀ M is diagonal: no shear, clamping is exact
 };
 
 } // namespace ff::runtime
