@@ -180,7 +180,8 @@ std::vector<TransformCase> transformCases() {
     const glm::mat4 turned = glm::rotate(
             glm::mat4(1.0f), glm::radians(35.0f), glm::normalize(glm::vec3(1, 2, 0.5f)));
     return {
-            // The blind of issue 13, exactly: 13.3 dB before the fix, 33.4 dB with faces.
+            // The blind of issue 13 (there 13.3 dB against 33.4 with faces). Here, with the
+            // tessellated box: 34.4 dB for every mode, 17.0 for points with the former ε rule.
             {"blind, y thin",
              glm::mat4(1.0f),
              stack(200, 0.05f, y, scaling(10.0f, 0.004f, 1.0f)),
@@ -195,7 +196,7 @@ std::vector<TransformCase> transformCases() {
              0.0},
             {"mirrored",
              glm::mat4(1.0f),
-             stack(200, 0.05f, y, scaling(-10.0f, 0.004f, -1.0f)),
+             stack(200, 0.05f, y, scaling(-10.0f, 0.004f, 1.0f)), // det < 0: a mirror
              0.0},
             {"sheared", glm::mat4(1.0f), stack(200, 0.05f, y, shear), 0.0},
             // A rotated, non-uniformly scaled parent over non-uniformly scaled children.
