@@ -278,11 +278,11 @@ def path(data, out, name):
         sel = [r for r in data if r["method"] == m]
         x = [int(r["frame"]) for r in sel]
         ax1.plot(x, [number(r["instability"]) for r in sel], color=f"C{i % 10}", label=m)
-        ax2.plot(x, capped([number(r["psnr_srgb"]) for r in sel]), color=f"C{i % 10}", label=m)
+        ax2.plot(x, capped([number(r["psnr_db"]) for r in sel]), color=f"C{i % 10}", label=m)
         ax3.plot(x, [number(r["frame_ms"]) for r in sel], color=f"C{i % 10}", label=m)
     ax1.set_ylabel("instability (linear luminance)")
     ax1.set_title("temporal instability: change beyond the reference's own (lower is better)")
-    ax2.set_ylabel("PSNR (dB" + (INF_NOTE if any(number(r["psnr_srgb"]) == math.inf for r in data) else "") + ")")
+    ax2.set_ylabel("PSNR (dB" + (INF_NOTE if any(number(r["psnr_db"]) == math.inf for r in data) else "") + ")")
     ax2.set_title("error against the per-frame full reference (higher is better)")
     ax3.set_ylabel("frame time (ms)")
     ax3.set_xlabel("frame")
@@ -292,7 +292,7 @@ def path(data, out, name):
     fig.tight_layout()
     fig.savefig(out / f"{name}.png", dpi=110)
 
-    if any(number(r.get("bytes_read", "0")) > 0 for r in data):
+    if any(number(r.get("bytes_read_total", "0")) > 0 for r in data):
         bytes_read(data, methods, out / f"{name}-bytes.png")
 
 
@@ -302,7 +302,7 @@ def bytes_read(data, methods, png):
     fig, ax = plt.subplots(figsize=(7, 4.5))
     for i, m in enumerate(methods):
         sel = [r for r in data if r["method"] == m]
-        ax.plot([number(r["bytes_read"]) / 2**20 for r in sel], capped([number(r["psnr_srgb"]) for r in sel]),
+        ax.plot([number(r["bytes_read_total"]) / 2**20 for r in sel], capped([number(r["psnr_db"]) for r in sel]),
                 ".-", color=f"C{i % 10}", label=m, markersize=3)
     ax.set_xlabel("MiB read so far (cold cache)")
     ax.set_ylabel("PSNR against the full reference (dB)")

@@ -1,4 +1,4 @@
-#include <ff/runtime/CachedPageAccess.h>
+#include "CachedPageAccess.h"
 
 #include <cstring>
 

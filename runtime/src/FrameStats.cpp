@@ -8,6 +8,7 @@ std::string FrameStats::toJson() const {
     const nlohmann::json j = {
             {"nodes_visited", nodesVisited},
             {"nodes_culled", nodesCulled},
+            {"nodes_occluded", nodesOccluded},
             {"instances_entered", instancesEntered},
             {"cubes_drawn", cubesDrawn},
             {"cube_faces_drawn", cubeFacesDrawn},
@@ -17,6 +18,7 @@ std::string FrameStats::toJson() const {
             {"pages_uploaded", pagesUploaded},
             {"nodes_deferred", nodesDeferred},
             {"pages_missing", pagesMissing},
+            {"uploads_refused", uploadsRefused},
             {"select_ms", selectMs},
             {"draw_ms", drawMs},
             {"total_ms", totalMs},

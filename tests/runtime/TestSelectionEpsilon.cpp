@@ -6,7 +6,9 @@
 
 #include <ff/builder/Generators.h>
 #include <ff/builder/SceneBuilder.h>
-#include <ff/runtime/Selection.h>
+#include "RecordingSink.h"
+
+#include <ff/runtime/BackToFrontTraversal.h>
 #include <ff/storage/SceneFile.h>
 
 #include <gtest/gtest.h>
@@ -61,18 +63,21 @@ protected:
     /** True if the frame is the root's cube alone (the root was not refined). */
     bool rootDrawnAsCube(const Camera& camera, float epsilon) {
         MappedPageAccess pages(*mScene);
-        Selection selection(*mScene, pages);
-        SelectionOptions options;
-        options.epsilonPixels = epsilon;
-        options.viewportHeight = kViewportHeight;
-        options.viewportWidth = kViewportHeight * 4.0f / 3.0f;
-        DrawList draws;
+        BackToFrontTraversal traversal(*mScene, pages);
+        FrameContext frame;
+        frame.camera = camera;
+        frame.selection.epsilonPixels = epsilon;
+        frame.height = static_cast<int>(kViewportHeight);
+        frame.width = static_cast<int>(kViewportHeight * 4.0f / 3.0f);
+        test::RecordingSink draws;
+        NoVisibility visibility;
+        AdmitAll admitAll;
         FrameStats stats;
-        EXPECT_TRUE(selection.select(camera, options, draws, stats).isOk());
-        const bool cubeOnly = draws.cubes.size() == 1 && draws.geometry.empty();
+        EXPECT_TRUE(traversal.traverse(frame, {draws, visibility, admitAll}, stats).isOk());
+        const bool cubeOnly = draws.cubes.size() == 1 && draws.runs.empty();
         if (cubeOnly) {
-            EXPECT_EQ(draws.cubes[0].boxMin, mCellMin);
-            EXPECT_EQ(draws.cubes[0].boxMax, mCellMax);
+            EXPECT_EQ(draws.cubes[0].cube.boxMin, mCellMin);
+            EXPECT_EQ(draws.cubes[0].cube.boxMax, mCellMax);
         }
         return cubeOnly;
     }

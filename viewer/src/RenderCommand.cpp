@@ -3,9 +3,8 @@
 #include "OutputFile.h"
 #include "Units.h"
 
-#include <ff/runtime/FrameRenderer.h>
 #include <ff/runtime/OffscreenContext.h>
-#include <ff/storage/SceneFile.h>
+#include <ff/runtime/StreamingSession.h>
 
 #include <nlohmann/json.hpp>
 
@@ -62,35 +61,37 @@ int runRender(const RenderArgs& args) {
     if (!statsFile)
         return reportError("render", statsFile.status().withContext("--stats"));
 
-    auto scene = storage::SceneFile::open(args.scene);
-    if (!scene)
-        return reportError("render", scene.status().withContext(args.scene));
-    auto camera = args.camera.resolve(**scene);
-    if (!camera)
-        return reportError("render", camera.status());
     auto context = runtime::OffscreenContext::create();
     if (!context)
         return reportError("render", context.status());
-    runtime::RendererOptions rendererOptions;
-    rendererOptions.gpuBudgetBytes = *gpuBudget;
-    rendererOptions.backgroundLinear = *background;
-    auto renderer = runtime::FrameRenderer::create(**scene, rendererOptions);
-    if (!renderer)
-        return reportError("render", renderer.status());
+    runtime::SessionOptions sessionOptions;
+    sessionOptions.renderer.gpuBudgetBytes = *gpuBudget;
+    sessionOptions.renderer.backgroundLinear = *background;
+    auto session = runtime::StreamingSession::open(args.scene, sessionOptions);
+    if (!session)
+        return reportError("render", session.status().withContext(args.scene));
+    auto camera = args.camera.resolve((*session)->scene());
+    if (!camera)
+        return reportError("render", camera.status());
 
-    runtime::SelectionOptions selection;
-    selection.method = *method;
-    selection.epsilonPixels = args.epsilon;
-    selection.cubeStyle = runtime::parseCubeStyle(args.cubeDraw).value_or(runtime::CubeStyle::Auto); // checked by CLI11
-    selection.maxCubeAnisotropy = args.cubeAnisotropy;
+    runtime::FrameContext frameContext;
+    frameContext.camera = *camera;
+    frameContext.width = size->x;
+    frameContext.height = size->y;
+    frameContext.supersample = args.supersample;
+    frameContext.selection.method = *method;
+    frameContext.selection.epsilonPixels = args.epsilon;
+    frameContext.selection.cubeStyle =
+            runtime::parseCubeStyle(args.cubeDraw).value_or(runtime::CubeStyle::Auto); // checked by CLI11
+    frameContext.selection.maxCubeAnisotropy = args.cubeAnisotropy;
     nlohmann::json frames = nlohmann::json::array();
     Result<runtime::Frame> frame = Status(ErrorCode::Internal, "no frame rendered");
     std::vector<Status> failures;
     for (int f = 0; f < args.frames; ++f) {
-        frame = (*renderer)->render(*camera, selection, size->x, size->y, args.supersample);
+        frame = (*session)->render(frameContext);
         if (!frame)
             return reportError("render", frame.status().withContext(args.scene));
-        const auto& fresh = (*renderer)->newFailures();
+        const auto& fresh = (*session)->newFailures();
         failures.insert(failures.end(), fresh.begin(), fresh.end());
         nlohmann::json stats = nlohmann::json::parse(frame->stats.toJson());
         stats["frame"] = f;

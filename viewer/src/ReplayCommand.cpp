@@ -7,17 +7,14 @@
 #include "ImageOutput.h"
 #include "OutputFile.h"
 #include "Percentile.h"
-#include "StreamingPages.h"
 #include "Units.h"
 
-#include <ff/cache/PageCache.h>
-#include <ff/cache/ScenePageSource.h>
-#include <ff/runtime/CachedPageAccess.h>
 #include <ff/runtime/CameraPath.h>
-#include <ff/runtime/FrameRenderer.h>
+#include <ff/runtime/FrameTelemetry.h>
 #include <ff/runtime/ImageMetrics.h>
 #include <ff/runtime/OffscreenContext.h>
 #include <ff/runtime/PathCuts.h>
+#include <ff/runtime/StreamingSession.h>
 #include <ff/storage/ProcessMemory.h>
 
 #include <nlohmann/json.hpp>
@@ -48,6 +45,7 @@ struct ReplayArgs {
     float cubeAnisotropy = 1.0f;
     unsigned ioThreads = 2;
     std::size_t uploadsPerFrame = 64;
+    std::uint32_t gpuUploadsPerFrame = 0;
     int prefetchFrames = 4;
     std::string csv;
     std::string json;
@@ -57,29 +55,12 @@ struct ReplayArgs {
     bool coverage = false;
 };
 
-/** Counts pages read, through the source, so the replay knows the unique bytes the path needed. */
-class CountingSource final : public cache::IPageSource {
-public:
-    explicit CountingSource(std::shared_ptr<cache::IPageSource> inner) : mInner(std::move(inner)) {}
-    std::uint32_t pageSize() const override { return mInner->pageSize(); }
-    std::uint64_t pageCount() const override { return mInner->pageCount(); }
-    Status readPage(std::uint64_t index, std::span<std::byte> out) override {
-        {
-            std::lock_guard<std::mutex> lock(mMutex); // I/O threads read concurrently
-            mPages.insert(index);
-        }
-        return mInner->readPage(index, out);
-    }
-    std::uint64_t uniquePages() const {
-        std::lock_guard<std::mutex> lock(mMutex);
-        return mPages.size();
-    }
-
-private:
-    std::shared_ptr<cache::IPageSource> mInner;
-    mutable std::mutex mMutex;
-    std::unordered_set<std::uint64_t> mPages;
-};
+std::string joinCsv(const std::vector<std::string>& cells) {
+    std::string line;
+    for (std::size_t i = 0; i < cells.size(); ++i)
+        line += (i ? "," : "") + cells[i];
+    return line;
+}
 
 int runReplay(const ReplayArgs& args) {
     auto size = parseImageSize(args.size);
@@ -109,61 +90,55 @@ int runReplay(const ReplayArgs& args) {
             return reportError("replay", folder.withContext("--frames-dir"));
     }
 
-    auto scene = storage::SceneFile::open(args.scene);
-    if (!scene)
-        return reportError("replay", scene.status().withContext(args.scene));
-    auto source = cache::ScenePageSource::open(args.scene);
-    if (!source)
-        return reportError("replay", source.status().withContext(args.scene));
-    auto counting = std::make_shared<CountingSource>(std::move(*source));
-    // --sync is a reference: one reader and no refused requests make it repeatable. Asynchronous,
-    // at least --uploads-per-frame reads may be under way, so that a frame can install that many.
-    const auto maxInFlight = static_cast<std::uint32_t>(
-            std::clamp<std::size_t>(args.uploadsPerFrame, cache::PageCacheOptions{}.maxInFlight, 1u << 20));
-    auto streamingPages = args.sync ? openStreaming(**scene, counting, args.cacheMb << 20, 1, 1u << 30)
-                                    : openStreaming(**scene, counting, args.cacheMb << 20, args.ioThreads, maxInFlight);
-    if (!streamingPages)
-        return reportError("replay", streamingPages.status());
-    cache::PageCache* pageCache = streamingPages->cache.get();
-    runtime::CachedPageAccess& access = *streamingPages->access;
-
     auto context = runtime::OffscreenContext::create();
     if (!context)
         return reportError("replay", context.status());
-    runtime::RendererOptions rendererOptions;
-    rendererOptions.gpuBudgetBytes = *gpuBudget;
-    auto streaming = runtime::FrameRenderer::create(**scene, access, rendererOptions);
-    if (!streaming)
-        return reportError("replay", streaming.status());
-    std::unique_ptr<runtime::FrameRenderer> complete; // everything resident: the error reference
+    // --sync is a reference: one reader and no refused requests make it repeatable. Asynchronous,
+    // at least --uploads-per-frame reads may be under way, so that a frame can install that many.
+    runtime::SessionOptions sessionOptions;
+    sessionOptions.cacheBytes = args.cacheMb << 20;
+    sessionOptions.ioThreads = args.sync ? 1 : args.ioThreads;
+    sessionOptions.maxInFlight =
+            args.sync ? 1u << 30 : static_cast<std::uint32_t>(std::min<std::size_t>(args.uploadsPerFrame, 1u << 20));
+    sessionOptions.renderer.gpuBudgetBytes = *gpuBudget;
+    auto session = runtime::StreamingSession::open(args.scene, sessionOptions);
+    if (!session)
+        return reportError("replay", session.status().withContext(args.scene));
+    runtime::StreamingSession& streaming = **session;
+    const storage::SceneFile& scene = streaming.scene();
+    std::unique_ptr<runtime::StreamingSession> complete; // everything resident: the error reference
     if (args.error) {
-        auto reference = runtime::FrameRenderer::create(**scene, rendererOptions);
+        runtime::SessionOptions mapped;
+        mapped.renderer = sessionOptions.renderer;
+        auto reference = runtime::StreamingSession::open(args.scene, mapped);
         if (!reference)
-            return reportError("replay", reference.status());
+            return reportError("replay", reference.status().withContext(args.scene));
         complete = std::move(*reference);
     }
 
-    runtime::SelectionOptions selection;
-    selection.epsilonPixels = args.epsilon;
-    selection.maxCubeAnisotropy = args.cubeAnisotropy;
-    const runtime::Bounds bounds = sceneBounds(**scene);
-    const glm::dvec3 origin = sceneOrigin(**scene);
+    runtime::FrameContext frameContext;
+    frameContext.width = size->x;
+    frameContext.height = size->y;
+    frameContext.selection.epsilonPixels = args.epsilon;
+    frameContext.selection.maxCubeAnisotropy = args.cubeAnisotropy;
+    frameContext.budgets.pageInstallsPerFrame = args.uploadsPerFrame;
+    frameContext.budgets.gpuUploadsPerFrame = args.sync ? 0 : args.gpuUploadsPerFrame;
+    const runtime::Bounds bounds = sceneBounds(scene);
+    const glm::dvec3 origin = sceneOrigin(scene);
     const std::int64_t frames = path->frameCount();
-    nlohmann::json perFrame = nlohmann::json::array();
+    std::string perFrameJson = "[";
     std::ofstream csv;
     if (*csvFile) {
         csv.open((*csvFile)->temporaryPath(), std::ios::binary | std::ios::trunc);
-        csv << "frame,time_s,frame_ms,select_ms,draw_ms,requests,hits,misses,bytes_read,resident_bytes,"
-               "gpu_resident_bytes,in_flight,evicted,dropped,nodes_deferred,triangles,cubes,stalled,psnr_db,holes,"
-               "node_page_bytes,geometry_page_bytes\n";
+        csv << joinCsv(runtime::telemetryColumnNames()) << '\n';
     }
     std::vector<double> frameMs;
     std::uint64_t debtFrames = 0;
     std::uint64_t stalledFrames = 0;
-    std::uint64_t peakResident = 0;
     // The frame that used the most page bytes: its pages by type, and how much of them it used.
     struct FrameUse {
-        runtime::FramePageUse pages;
+        std::uint64_t nodePageBytes = 0;
+        std::uint64_t geometryPageBytes = 0;
         std::uint64_t nodesVisited = 0;
         std::uint64_t trianglesDrawn = 0;
     } peakUse;
@@ -178,13 +153,11 @@ int runReplay(const ReplayArgs& args) {
     std::uint64_t segments = 0;
     std::uint64_t neverConverged = 0;
     bool converged = true; // no segment is open before frame 0
-    // Zero, not the stats after opening: frame 0 carries the root pages read before it, so the
-    // per-frame columns add up to the summary's totals.
-    cache::PageCacheStats previous{};
 
     for (std::int64_t f = 0; f < frames; ++f) {
-        runtime::Camera camera = path->sample(path->frameTime(f), origin);
-        camera.fitClipPlanes(bounds);
+        frameContext.camera = path->sample(path->frameTime(f), origin);
+        frameContext.camera.fitClipPlanes(bounds);
+        frameContext.timeSeconds = path->frameTime(f);
         if (cuts[static_cast<std::size_t>(f)]) {
             neverConverged += converged ? 0 : 1;
             ++segments;
@@ -195,39 +168,26 @@ int runReplay(const ReplayArgs& args) {
         if (args.prefetchFrames > 0 && !args.sync) {
             runtime::Camera ahead = path->sample(path->frameTime(std::min<std::int64_t>(f + args.prefetchFrames, frames - 1)), origin);
             ahead.fitClipPlanes(bounds);
-            (*streaming)->setPrefetchCamera(ahead);
+            streaming.setPrefetchCamera(ahead);
         }
-        const auto start = std::chrono::steady_clock::now();
-        pageCache->pump(args.uploadsPerFrame);
-        Result<runtime::Frame> frame = (*streaming)->render(camera, selection, size->x, size->y);
-        bool stalled = false;
         // --sync: the frame waits for what it lacks (a reference mode; every wait is a stall).
-        while (args.sync && frame && frame->stats.nodesDeferred > 0) {
-            const std::uint64_t before = pageCache->stats().completed;
-            pageCache->drain();
-            stalled = true;
-            frame = (*streaming)->render(camera, selection, size->x, size->y);
-            if (pageCache->stats().completed == before)
-                break; // nothing more fits the budget: this frame is as good as it gets
-        }
+        Result<runtime::Frame> frame = args.sync ? streaming.renderComplete(frameContext) : streaming.render(frameContext);
         if (!frame)
             return reportError("replay", frame.status());
-        const double ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
-        const auto& fresh = (*streaming)->newFailures();
+        const auto& fresh = streaming.newFailures();
         failures.insert(failures.end(), fresh.begin(), fresh.end());
+        runtime::FrameTelemetry telemetry = streaming.lastFrame();
 
-        const cache::PageCacheStats& now = pageCache->stats();
-        peakResident = std::max(peakResident, now.residentBytes);
-        const runtime::FramePageUse& used = access.framePageUse();
-        if (used.nodePages + used.geometryPages >= peakUse.pages.nodePages + peakUse.pages.geometryPages)
-            peakUse = {used, frame->stats.nodesVisited, frame->stats.trianglesDrawn};
+        if (telemetry.nodePageBytes + telemetry.geometryPageBytes >= peakUse.nodePageBytes + peakUse.geometryPageBytes)
+            peakUse = {telemetry.nodePageBytes, telemetry.geometryPageBytes, frame->stats.nodesVisited,
+                       frame->stats.trianglesDrawn};
         const storage::ProcessMemory memory = storage::readProcessMemory();
         peakMemory.anonBytes = std::max(peakMemory.anonBytes, memory.anonBytes);
         peakMemory.fileBytes = std::max(peakMemory.fileBytes, memory.fileBytes);
-        frameMs.push_back(ms);
+        frameMs.push_back(telemetry.frameMs);
         const bool debt = frame->stats.nodesDeferred > 0;
         debtFrames += debt ? 1 : 0;
-        stalledFrames += stalled ? 1 : 0;
+        stalledFrames += telemetry.stalled ? 1 : 0;
         if (!converged) {
             ++sinceCut;
             if (!debt) {
@@ -236,16 +196,14 @@ int runReplay(const ReplayArgs& args) {
             }
         }
 
-        double psnr = NAN;
-        std::uint64_t holes = 0;
         if (complete) {
-            Result<runtime::Frame> reference = complete->render(camera, selection, size->x, size->y);
+            Result<runtime::Frame> reference = complete->render(frameContext);
             if (!reference)
                 return reportError("replay", reference.status());
             if (auto e = runtime::colorError(frame->image, reference->image))
-                psnr = e->psnrSrgb;
+                telemetry.psnrDb = e->psnrSrgb;
             if (auto c = runtime::coverageError(frame->image, reference->image))
-                holes = c->holes;
+                telemetry.holes = c->holes;
         }
         if (!args.framesDir.empty()) {
             char name[32];
@@ -253,48 +211,15 @@ int runReplay(const ReplayArgs& args) {
             if (Status written = writeImage(std::filesystem::path(args.framesDir) / name, frame->image, args.coverage); !written)
                 return reportError("replay", written);
         }
-
-        const nlohmann::json row = {
-                {"frame", f},
-                {"time_s", path->frameTime(f)},
-                {"frame_ms", ms},
-                {"select_ms", frame->stats.selectMs},
-                {"draw_ms", frame->stats.drawMs},
-                {"requests", now.requests - previous.requests},
-                {"hits", now.hits - previous.hits},
-                {"misses", now.misses - previous.misses},
-                {"bytes_read", now.bytesRead - previous.bytesRead},
-                {"resident_bytes", now.residentBytes},
-                {"gpu_resident_bytes", (*streaming)->gpuResidentBytes()},
-                {"in_flight", now.inFlight},
-                {"evicted", now.evicted - previous.evicted},
-                {"dropped", now.dropped - previous.dropped},
-                {"nodes_deferred", frame->stats.nodesDeferred},
-                {"triangles", frame->stats.trianglesDrawn},
-                {"cubes", frame->stats.cubesDrawn},
-                {"stalled", stalled},
-                {"psnr_db", std::isfinite(psnr) ? nlohmann::json(psnr) : nlohmann::json(nullptr)},
-                {"holes", holes},
-                {"node_page_bytes", used.nodePages * (*scene)->pageSize()},
-                {"geometry_page_bytes", used.geometryPages * (*scene)->pageSize()},
-        };
-        if (csv.is_open()) {
-            csv << f << ',' << row["time_s"] << ',' << ms << ',' << frame->stats.selectMs << ',' << frame->stats.drawMs
-                << ',' << row["requests"] << ',' << row["hits"] << ',' << row["misses"] << ',' << row["bytes_read"] << ','
-                << now.residentBytes << ',' << row["gpu_resident_bytes"] << ',' << now.inFlight << ','
-                << row["evicted"] << ',' << row["dropped"] << ',' << frame->stats.nodesDeferred << ','
-                << frame->stats.trianglesDrawn << ',' << frame->stats.cubesDrawn << ',' << (stalled ? 1 : 0) << ','
-                << (std::isfinite(psnr) ? std::to_string(psnr) : std::string()) << ',' << holes << ','
-                << row["node_page_bytes"] << ',' << row["geometry_page_bytes"] << '\n';
-        }
-        perFrame.push_back(row);
-        previous = now;
+        if (csv.is_open())
+            csv << joinCsv(runtime::telemetryCsvCells(telemetry)) << '\n';
+        perFrameJson += (f > 0 ? ",\n" : "\n") + runtime::telemetryJson(telemetry);
     }
     neverConverged += converged ? 0 : 1;
 
-    const cache::PageCacheStats& total = pageCache->stats();
-    const std::uint64_t uniqueBytes = counting->uniquePages() * (*scene)->pageSize();
-    const std::uint32_t pageSize = (*scene)->pageSize();
+    const runtime::SessionTotals total = streaming.totals();
+    const std::uint64_t uniqueBytes = total.uniqueBytes;
+    const std::uint32_t pageSize = scene.pageSize();
     const auto share = [](std::uint64_t used, std::uint64_t slots) {
         return slots ? static_cast<double>(used) / static_cast<double>(slots) : 0.0;
     };
@@ -309,17 +234,18 @@ int runReplay(const ReplayArgs& args) {
             {"bytes_read", total.bytesRead},
             {"unique_bytes", uniqueBytes},
             {"over_fetch", uniqueBytes ? static_cast<double>(total.bytesRead) / static_cast<double>(uniqueBytes) : 0.0},
-            {"peak_resident_bytes", peakResident},
+            {"peak_resident_bytes", total.peakResidentBytes},
             // The frame that used the most pages: node against geometry page bytes, and the
             // share of their slots it used (records visited, triangles drawn).
-            {"frame_node_bytes", peakUse.pages.nodePages * pageSize},
-            {"frame_geometry_bytes", peakUse.pages.geometryPages * pageSize},
+            {"frame_node_bytes", peakUse.nodePageBytes},
+            {"frame_geometry_bytes", peakUse.geometryPageBytes},
             {"frame_nodes_visited", peakUse.nodesVisited},
             {"frame_triangles_drawn", peakUse.trianglesDrawn},
-            {"frame_node_slot_use", share(peakUse.nodesVisited, peakUse.pages.nodePages * storage::nodesPerPage(pageSize))},
+            {"frame_node_slot_use",
+             share(peakUse.nodesVisited, peakUse.nodePageBytes / pageSize * storage::nodesPerPage(pageSize))},
             {"frame_triangle_slot_use",
-             share(peakUse.trianglesDrawn, peakUse.pages.geometryPages * storage::trianglesPerPage(pageSize))},
-            {"budget_bytes", pageCache->budgetBytes()},
+             share(peakUse.trianglesDrawn, peakUse.geometryPageBytes / pageSize * storage::trianglesPerPage(pageSize))},
+            {"budget_bytes", total.budgetBytes},
             {"debt_frames", debtFrames},
             {"stalled_frames", stalledFrames},
             // null when a segment never reached full quality: its count is in never_converged.
@@ -344,7 +270,7 @@ int runReplay(const ReplayArgs& args) {
             return reportError("replay", written);
     }
     if (*jsonFile) {
-        if (const Status written = (*jsonFile)->commitText(perFrame.dump(1) + "\n"); !written)
+        if (const Status written = (*jsonFile)->commitText(perFrameJson + "\n]\n"); !written)
             return reportError("replay", written);
     }
     if (*summaryFile) {
@@ -376,6 +302,9 @@ CommandRunner addReplayCommand(CLI::App& app) {
             ->capture_default_str();
     cmd->add_option("--io-threads", args->ioThreads, "Background read threads")->capture_default_str();
     cmd->add_option("--uploads-per-frame", args->uploadsPerFrame, "Finished reads installed per frame at most (also the reads under way at most, if above 64)")
+            ->capture_default_str();
+    cmd->add_option("--gpu-uploads-per-frame", args->gpuUploadsPerFrame,
+                    "Geometry pages uploaded to the GPU per frame at most; cells over it are drawn as cubes (0: no bound; --sync: none)")
             ->capture_default_str();
     cmd->add_option("--prefetch-frames", args->prefetchFrames,
                     "Also ask for the pages of the view this many frames ahead on the path (0: off)")

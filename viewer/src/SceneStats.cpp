@@ -5,10 +5,9 @@
 #include <ff/builder/Generators.h>
 #include <ff/builder/SceneSink.h>
 #include <ff/runtime/CameraPathGenerators.h>
-#include <ff/runtime/DrawList.h>
+#include <ff/runtime/BackToFrontTraversal.h>
 #include <ff/runtime/FrameStats.h>
 #include <ff/runtime/PageAccess.h>
-#include <ff/runtime/Selection.h>
 
 #include <algorithm>
 #include <cstring>
@@ -309,16 +308,19 @@ Status measureCubeUsage(
         const storage::SceneFile& scene, const CubeUsageOptions& options, SceneStats& stats) {
     const runtime::Bounds bounds = sceneBounds(scene);
     runtime::MappedPageAccess pages(scene);
-    runtime::Selection selection(scene, pages);
+    runtime::BackToFrontTraversal traversal(scene, pages);
     CubeRecorder recorder;
-    runtime::SelectionOptions selectionOptions;
-    selectionOptions.epsilonPixels = options.epsilonPixels;
-    selectionOptions.viewportWidth = static_cast<float>(options.width);
-    selectionOptions.viewportHeight = static_cast<float>(options.height);
-    selectionOptions.observer = &recorder;
+    runtime::FrameContext frame;
+    frame.width = options.width;
+    frame.height = options.height;
+    frame.selection.epsilonPixels = options.epsilonPixels;
+    frame.selection.observer = &recorder;
+    // Only what the traversal chooses is recorded: nothing is drawn.
+    runtime::DiscardingSink discard;
+    runtime::NoVisibility visibility;
+    runtime::AdmitAll admitAll;
     runtime::PathGeneratorOptions generator;
     generator.frames = options.framesPerPath;
-    runtime::DrawList drawList;
     for (const std::string& kind : options.paths) {
         Result<runtime::CameraPath> path =
                 Status(ErrorCode::InvalidArgument,
@@ -332,12 +334,12 @@ Status measureCubeUsage(
         if (!path)
             return path.status().withContext(kind + " path");
         for (std::int64_t f = 0; f < path->frameCount(); ++f) {
-            runtime::Camera camera = path->sample(path->frameTime(f));
-            camera.fitClipPlanes(bounds);
+            frame.camera = path->sample(path->frameTime(f));
+            frame.camera.fitClipPlanes(bounds);
             runtime::FrameStats frameStats;
-            FF_RETURN_IF_ERROR(selection.select(camera, selectionOptions, drawList, frameStats));
-            if (!selection.newFailures().empty())
-                return selection.newFailures().front();
+            FF_RETURN_IF_ERROR(traversal.traverse(frame, {discard, visibility, admitAll}, frameStats));
+            if (!traversal.newFailures().empty())
+                return traversal.newFailures().front();
         }
     }
 

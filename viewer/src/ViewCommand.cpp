@@ -3,13 +3,11 @@
 #include "Commands.h"
 #include "Hud.h"
 #include "OutputFile.h"
-#include "StreamingPages.h"
 #include "Units.h"
 #include "ViewerControls.h"
 #include "Window.h"
 
-#include <ff/cache/ScenePageSource.h>
-#include <ff/runtime/FrameRenderer.h>
+#include <ff/runtime/StreamingSession.h>
 #include <ff/storage/SceneFile.h>
 
 #include <nlohmann/json.hpp>
@@ -37,6 +35,7 @@ struct ViewArgs {
     std::string gpuBudget = "512MiB";
     std::uint64_t cacheMb = 0;
     std::size_t uploadsPerFrame = 64;
+    std::uint32_t gpuUploadsPerFrame = 0;
     std::string background = "0.70,0.75,0.83";
     int frames = 0;
     std::string screenshot;
@@ -154,6 +153,7 @@ int runView(const ViewArgs& args) {
             return reportError("view", folder.withContext("--screenshot-dir"));
     }
 
+    // The scene is opened before the window, so that a bad file says so without a display.
     auto scene = storage::SceneFile::open(args.scene);
     if (!scene)
         return reportError("view", scene.status().withContext(args.scene));
@@ -161,6 +161,8 @@ int runView(const ViewArgs& args) {
     if (!initialCamera)
         return reportError("view", initialCamera.status());
     const runtime::Bounds bounds = sceneBounds(**scene);
+    const glm::dvec3 origin = sceneOrigin(**scene);
+    scene->reset(); // the session opens its own
 
     // ---- Window, HUD, renderer (destroyed in reverse order, while the context lives) -------
     WindowOptions windowOptions;
@@ -184,33 +186,22 @@ int runView(const ViewArgs& args) {
     controls.gpuBudgetBytes = *gpuBudget;
     controls.hudVisible = !args.noHud;
     // --cache-mb streams pages through the page cache; without it every page is mapped.
-    std::optional<StreamingPages> streaming;
-    if (args.cacheMb > 0) {
-        auto source = cache::ScenePageSource::open(args.scene);
-        if (!source)
-            return reportError("view", source.status().withContext(args.scene));
-        auto pages = openStreaming(**scene, std::move(*source), args.cacheMb << 20, 2);
-        if (!pages)
-            return reportError("view", pages.status());
-        streaming = std::move(*pages);
-        controls.cacheBudgetBytes = args.cacheMb << 20;
-    }
-    const auto makeRenderer = [&]() {
-        runtime::RendererOptions options;
-        options.gpuBudgetBytes = controls.gpuBudgetBytes;
-        options.backgroundLinear = *background;
-        return streaming ? runtime::FrameRenderer::create(**scene, *streaming->access, options)
-                         : runtime::FrameRenderer::create(**scene, options);
-    };
-    auto renderer = makeRenderer();
-    if (!renderer)
-        return reportError("view", renderer.status().withContext(args.scene));
+    controls.cacheBudgetBytes = args.cacheMb << 20;
+    runtime::SessionOptions sessionOptions;
+    sessionOptions.cacheBytes = args.cacheMb << 20;
+    sessionOptions.renderer.gpuBudgetBytes = controls.gpuBudgetBytes;
+    sessionOptions.renderer.backgroundLinear = *background;
+    auto session = runtime::StreamingSession::open(args.scene, sessionOptions);
+    if (!session)
+        return reportError("view", session.status().withContext(args.scene));
+    runtime::StreamingSession& streaming = **session;
 
-    CameraController navigation(*initialCamera, initialPivot(*initialCamera, bounds, sceneOrigin(**scene), args), bounds);
+    CameraController navigation(*initialCamera, initialPivot(*initialCamera, bounds, origin, args), bounds);
 
     // ---- Frame loop ------------------------------------------------------------------------
     using Clock = std::chrono::steady_clock;
-    auto last = Clock::now();
+    const auto start = Clock::now();
+    auto last = start;
     double smoothedMs = 0.0;
     bool failed = false;
     HudInfo hudInfo;
@@ -246,13 +237,11 @@ int runView(const ViewArgs& args) {
             controls.halveBudget();
         for (int i = 0; i < input.pressed(Key::Equal); ++i)
             controls.doubleBudget();
-        if (streaming && controls.cacheBudgetBytes != cacheBudgetBefore)
-            streaming->cache->setBudget(controls.cacheBudgetBytes);
+        if (controls.cacheBudgetBytes != cacheBudgetBefore)
+            streaming.setCacheBudget(controls.cacheBudgetBytes);
         if (controls.gpuBudgetBytes != budgetBefore) {
-            renderer->reset(); // frees the old page arena before the new one is allocated
-            renderer = makeRenderer();
-            if (!renderer)
-                return reportError("view", renderer.status().withContext(args.scene));
+            if (const Status changed = streaming.setGpuBudget(controls.gpuBudgetBytes); !changed)
+                return reportError("view", changed.withContext(args.scene));
         }
 
         // Camera.
@@ -268,23 +257,28 @@ int runView(const ViewArgs& args) {
             continue; // minimized
 
         // Draw.
-        runtime::SelectionOptions selection;
-        selection.method = controls.method;
-        selection.epsilonPixels = controls.epsilonPixels;
-        const runtime::Camera camera = navigation.camera();
-        if (streaming) {
-            streaming->cache->pump(args.uploadsPerFrame); // finished reads, under an upload budget
+        runtime::FrameContext frameContext;
+        frameContext.camera = navigation.camera();
+        frameContext.width = windowSize.x;
+        frameContext.height = windowSize.y;
+        frameContext.timeSeconds = std::chrono::duration<double>(now - start).count();
+        frameContext.selection.method = controls.method;
+        frameContext.selection.epsilonPixels = controls.epsilonPixels;
+        frameContext.budgets.pageInstallsPerFrame = args.uploadsPerFrame;
+        frameContext.budgets.gpuUploadsPerFrame = args.gpuUploadsPerFrame;
+        const runtime::Camera& camera = frameContext.camera;
+        if (streaming.streams()) {
             // Prefetch along the motion: where the camera will be in four frames at this speed.
             runtime::Camera ahead = camera;
             ahead.eye += 4.0f * (camera.eye - previousEye);
             ahead.fitClipPlanes(bounds);
-            (*renderer)->setPrefetchCamera(ahead);
+            streaming.setPrefetchCamera(ahead);
         }
         previousEye = camera.eye;
-        auto stats = (*renderer)->present(camera, selection, windowSize.x, windowSize.y);
+        auto stats = streaming.present(frameContext);
         if (!stats)
             return reportError("view", stats.status().withContext(args.scene));
-        for (const Status& failure : (*renderer)->newFailures()) {
+        for (const Status& failure : streaming.newFailures()) {
             reportError("view", failure.withContext(args.scene));
             failed = true;
         }
@@ -320,10 +314,11 @@ int runView(const ViewArgs& args) {
             hudInfo.trianglesDrawn = stats->trianglesDrawn;
             hudInfo.cubesDrawn = stats->cubesDrawn;
             hudInfo.debt = stats->nodesDeferred;
-            hudInfo.residentBytes = streaming ? streaming->cache->stats().residentBytes : (*renderer)->gpuResidentBytes();
+            const runtime::FrameTelemetry& telemetry = streaming.lastFrame();
+            hudInfo.residentBytes = streaming.streams() ? telemetry.residentBytes : telemetry.gpuResidentBytes;
             hudInfo.budgetBytes = controls.adjustableBudget();
             hudInfo.budgetName = controls.cacheBudgetBytes ? "cache" : "gpu";
-            hudInfo.requestsInFlight = streaming ? streaming->cache->stats().inFlight : 0;
+            hudInfo.requestsInFlight = telemetry.inFlight;
             hudInfo.width = windowSize.x;
             hudInfo.height = windowSize.y;
             (*hud)->draw(formatHud(hudInfo), windowSize);
@@ -361,6 +356,9 @@ CommandRunner addViewCommand(CLI::App& app) {
     cmd->add_option("--cache-mb", args->cacheMb, "Stream pages through a page cache of this many MiB (0: map everything)")
             ->capture_default_str();
     cmd->add_option("--uploads-per-frame", args->uploadsPerFrame, "Finished page reads installed per frame at most")
+            ->capture_default_str();
+    cmd->add_option("--gpu-uploads-per-frame", args->gpuUploadsPerFrame,
+                    "Geometry pages uploaded to the GPU per frame at most; cells over it are drawn as cubes (0: no bound)")
             ->capture_default_str();
     cmd->add_option("--gpu-budget", args->gpuBudget, "GPU memory for geometry pages")
             ->capture_default_str();

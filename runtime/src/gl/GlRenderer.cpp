@@ -13,6 +13,7 @@
 #include <cstddef>
 #include <string>
 #include <unordered_map>
+#include <unordered_set>
 #include <vector>
 
 namespace ff::runtime {
@@ -91,11 +92,13 @@ void ensureCapacity(GLuint buffer, GLsizeiptr& capacity, GLsizeiptr bytes) {
     bufferData(buffer, capacity, nullptr, GL_DYNAMIC_DRAW);
 }
 
+double millisecondsSince(std::chrono::steady_clock::time_point start) {
+    return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+}
+
 } // namespace
 
 struct Renderer::Impl {
-    const storage::SceneFile* scene = nullptr;
-    IPageAccess* pages = nullptr;
     RendererOptions options;
     GLuint geometryProgram = 0;
     GLuint cubeProgram = 0;
@@ -114,7 +117,14 @@ struct Renderer::Impl {
     std::vector<std::uint32_t> freeSlots;
     cache::PageLru lru;
     std::uint32_t batch = 0;
-    // Per-frame buffers.
+    // The frame in progress.
+    FrameOutput output = FrameOutput::Image;
+    int frameWidth = 0, frameHeight = 0, frameSupersample = 1;
+    glm::mat4 frameViewProjection{1.0f};
+    float framePixelScale = 1.0f;
+    std::uint32_t uploadLimit = 0;              ///< FrameBudgets::gpuUploadsPerFrame
+    std::unordered_set<std::uint64_t> admitted; ///< pages not in the arena admitted this frame
+    // Per-batch buffers.
     GLuint transforms = 0, normalMatrices = 0, localEyes = 0, iota = 0, indirect = 0, cubes = 0;
     GLsizeiptr transformsCap = 0, normalsCap = 0, eyesCap = 0, iotaCap = 0, indirectCap = 0, cubesCap = 0;
     std::vector<IndirectCommand> commands;
@@ -130,10 +140,8 @@ struct Renderer::Impl {
     ~Impl();
     Status ensureTarget(int width, int height);
     Status ensurePresentSource();
-    /** Draws `list` into the target, cleared to `clearColor` (linear, premultiplied). */
-    Status drawFrame(const DrawList& list, const Camera& camera, int width, int height, int supersample,
-                     const glm::vec4& clearColor, FrameStats& stats);
-    Result<std::uint32_t> residentSlot(std::uint64_t page, FrameStats& stats);
+    void uploadTransforms(const DrawList& list);
+    Result<std::uint32_t> residentSlot(const GeometryDraw& draw, FrameStats& stats);
     void growArena();
     void drawBatch(const glm::mat4& viewProjection);
     Status drawGeometry(const DrawList& list, const glm::mat4& viewProjection, FrameStats& stats);
@@ -159,11 +167,8 @@ Renderer::Renderer(std::unique_ptr<Impl> impl) : mImpl(std::move(impl)) {}
 Renderer::~Renderer() = default;
 
 
-Result<std::unique_ptr<Renderer>> Renderer::create(
-        const storage::SceneFile& scene, IPageAccess& pages, const RendererOptions& options) {
+Result<std::unique_ptr<Renderer>> Renderer::create(const storage::SceneFile& scene, const RendererOptions& options) {
     auto impl = std::make_unique<Impl>();
-    impl->scene = &scene;
-    impl->pages = &pages;
     impl->options = options;
     FF_ASSIGN_OR_RETURN(impl->geometryProgram, linkProgram({gl::kGeometryVertexShader}, gl::kGeometryFragmentShader));
     FF_ASSIGN_OR_RETURN(impl->cubeProgram, linkProgram({gl::kCubeShaderInputs, gl::kCubeVertexShader}, gl::kCubeFragmentShader));
@@ -286,7 +291,8 @@ void Renderer::Impl::growArena() {
     slotCount = grown;
 }
 
-Result<std::uint32_t> Renderer::Impl::residentSlot(std::uint64_t page, FrameStats& stats) {
+Result<std::uint32_t> Renderer::Impl::residentSlot(const GeometryDraw& draw, FrameStats& stats) {
+    const std::uint64_t page = draw.page;
     if (const auto it = slotOfPage.find(page); it != slotOfPage.end())
         return it->second;
     if (freeSlots.empty() && slotCount < maxSlots)
@@ -301,14 +307,10 @@ Result<std::uint32_t> Renderer::Impl::residentSlot(std::uint64_t page, FrameStat
         lru.erase(*victim);
         freeSlots.push_back(slot);
     }
-    // Selection only lists pages it found Ready this frame, so this lookup finds them too.
-    const PageLookup lookup = pages->lookup(page, storage::PageType::Geometry, 0.0f);
-    if (lookup.availability != PageAvailability::Ready)
-        return lookup.failure ? *lookup.failure : Status(ErrorCode::Internal, "page " + std::to_string(page) + " vanished");
-    const std::span<const std::byte> payload = lookup.payload;
+    // The draw carries the page's bytes, valid for the frame (the traversal found it Ready).
     const std::uint32_t slot = freeSlots.back();
     freeSlots.pop_back();
-    bufferSubData(arena, static_cast<GLintptr>(slot) * slotBytes, slotBytes, payload.data());
+    bufferSubData(arena, static_cast<GLintptr>(slot) * slotBytes, slotBytes, draw.payload);
     slotOfPage[page] = slot;
     pageOfSlot[slot] = page;
     ++stats.pagesUploaded;
@@ -337,10 +339,10 @@ void Renderer::Impl::drawBatch(const glm::mat4& viewProjection) {
 Status Renderer::Impl::drawGeometry(const DrawList& list, const glm::mat4& viewProjection, FrameStats& stats) {
     ++batch;
     for (const GeometryDraw& draw : list.geometry) {
-        Result<std::uint32_t> slot = residentSlot(draw.page, stats);
+        Result<std::uint32_t> slot = residentSlot(draw, stats);
         if (!slot && slot.status().code() == ErrorCode::OutOfBudget) {
             drawBatch(viewProjection); // frees this batch's pins
-            slot = residentSlot(draw.page, stats);
+            slot = residentSlot(draw, stats);
         }
         if (!slot)
             return slot.status();
@@ -377,13 +379,7 @@ void Renderer::Impl::drawCubes(const DrawList& list, const glm::mat4& viewProjec
     glDisable(GL_BLEND);
 }
 
-Status Renderer::Impl::drawFrame(
-        const DrawList& list, const Camera& camera, int width, int height, int supersample,
-        const glm::vec4& clearColor, FrameStats& stats) {
-    const int sampleWidth = width * supersample;
-    const int sampleHeight = height * supersample;
-    FF_RETURN_IF_ERROR(ensureTarget(sampleWidth, sampleHeight));
-
+void Renderer::Impl::uploadTransforms(const DrawList& list) {
     // Transforms, their normal matrices and the eye in each frame.
     const auto transformCount = static_cast<GLsizeiptr>(list.transforms.size());
     normalScratch.resize(list.transforms.size());
@@ -411,8 +407,28 @@ Status Renderer::Impl::drawFrame(
     glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 0, transforms);
     glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 1, normalMatrices);
     glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 2, localEyes);
+}
 
-    glBindFramebuffer(GL_FRAMEBUFFER, framebuffer);
+Status Renderer::beginFrame(const FrameContext& frame, FrameOutput output, FrameStats& stats) {
+    Impl& s = *mImpl;
+    const int supersample = output == FrameOutput::Image ? frame.supersample : 1;
+    if (frame.width <= 0 || frame.height <= 0 || supersample <= 0)
+        return Status(ErrorCode::InvalidArgument, "image size and supersampling must be positive");
+    const auto start = std::chrono::steady_clock::now();
+    s.output = output;
+    s.frameWidth = frame.width;
+    s.frameHeight = frame.height;
+    s.frameSupersample = supersample;
+    s.uploadLimit = frame.budgets.gpuUploadsPerFrame;
+    s.admitted.clear();
+    const int sampleWidth = frame.width * supersample;
+    const int sampleHeight = frame.height * supersample;
+    FF_RETURN_IF_ERROR(s.ensureTarget(sampleWidth, sampleHeight));
+    s.frameViewProjection = frame.camera.projection(static_cast<float>(frame.width) / static_cast<float>(frame.height)) *
+                       frame.camera.view();
+    s.framePixelScale = frame.camera.pixelScale(static_cast<float>(sampleHeight));
+
+    glBindFramebuffer(GL_FRAMEBUFFER, s.framebuffer);
     glViewport(0, 0, sampleWidth, sampleHeight);
     glEnable(GL_FRAMEBUFFER_SRGB); // the clear colour and every blend are in linear space
     glDisable(GL_CULL_FACE);
@@ -420,38 +436,53 @@ Status Renderer::Impl::drawFrame(
     glDepthFunc(GL_LESS);
     glDepthMask(GL_TRUE);
     glDisable(GL_BLEND);
+    // An Image is transparent: the background is composited on the CPU, after the resolve, so
+    // coverage survives as alpha. A window starts as the opaque background, which cubes blend
+    // over on the GPU (in linear space, like resolveFramebuffer does on the CPU).
+    const glm::vec4 clearColor =
+            output == FrameOutput::Image ? glm::vec4(0.0f) : glm::vec4(s.options.backgroundLinear, 1.0f);
     glClearColor(clearColor.r, clearColor.g, clearColor.b, clearColor.a);
     glClearDepth(1.0);
     glClear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
-
-    const glm::mat4 viewProjection =
-            camera.projection(static_cast<float>(width) / static_cast<float>(height)) * camera.view();
-    FF_RETURN_IF_ERROR(drawGeometry(list, viewProjection, stats));
-    drawCubes(list, viewProjection, camera.pixelScale(static_cast<float>(sampleHeight)));
+    stats.drawMs += millisecondsSince(start);
     return Status::ok();
 }
 
-Result<Image> Renderer::render(
-        const DrawList& list, const Camera& camera, int width, int height, int supersample, FrameStats& stats) {
+Status Renderer::draw(const DrawList& batch, FrameStats& stats) {
     Impl& s = *mImpl;
-    if (width <= 0 || height <= 0 || supersample <= 0)
-        return Status(ErrorCode::InvalidArgument, "image size and supersampling must be positive");
     const auto start = std::chrono::steady_clock::now();
-    // Transparent: the background is composited on the CPU, after the resolve, so coverage
-    // survives as alpha.
-    FF_RETURN_IF_ERROR(s.drawFrame(list, camera, width, height, supersample, glm::vec4(0.0f), stats));
-    glFinish(); // the frame time is the time until the GPU is done, not until submission
-    stats.drawMs += std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+    s.uploadTransforms(batch);
+    FF_RETURN_IF_ERROR(s.drawGeometry(batch, s.frameViewProjection, stats));
+    s.drawCubes(batch, s.frameViewProjection, s.framePixelScale);
+    stats.drawMs += millisecondsSince(start);
+    return Status::ok();
+}
 
-    const int targetWidth = width * supersample;
-    const int targetHeight = height * supersample;
+bool Renderer::admit(std::uint64_t geometryPage) {
+    Impl& s = *mImpl;
+    if (s.uploadLimit == 0 || s.slotOfPage.contains(geometryPage) || s.admitted.contains(geometryPage))
+        return true;
+    if (s.admitted.size() >= s.uploadLimit)
+        return false;
+    s.admitted.insert(geometryPage);
+    return true;
+}
+
+Result<Image> Renderer::finishImage(FrameStats& stats) {
+    Impl& s = *mImpl;
+    const auto start = std::chrono::steady_clock::now();
+    glFinish(); // the frame time is the time until the GPU is done, not until submission
+    stats.drawMs += millisecondsSince(start);
+
+    const int targetWidth = s.frameWidth * s.frameSupersample;
+    const int targetHeight = s.frameHeight * s.frameSupersample;
     s.readback.resize(static_cast<std::size_t>(targetWidth) * static_cast<std::size_t>(targetHeight) * 4);
     glPixelStorei(GL_PACK_ALIGNMENT, 1);
     glReadPixels(0, 0, targetWidth, targetHeight, GL_RGBA, GL_UNSIGNED_BYTE, s.readback.data());
     glBindFramebuffer(GL_FRAMEBUFFER, 0);
     if (const GLenum error = glGetError(); error != GL_NO_ERROR)
         return Status(ErrorCode::Internal, "OpenGL error " + std::to_string(error) + " while rendering");
-    return resolveFramebuffer(s.readback, width, height, supersample, s.options.backgroundLinear);
+    return resolveFramebuffer(s.readback, s.frameWidth, s.frameHeight, s.frameSupersample, s.options.backgroundLinear);
 }
 
 // ---- Presenting to a window ---------------------------------------------------------------
@@ -477,20 +508,18 @@ Status Renderer::Impl::ensurePresentSource() {
     return Status::ok();
 }
 
-Status Renderer::present(const DrawList& list, const Camera& camera, int width, int height, FrameStats& stats) {
+Status Renderer::finishPresent(FrameStats& stats) {
     Impl& s = *mImpl;
-    if (width <= 0 || height <= 0)
-        return Status(ErrorCode::InvalidArgument, "window size must be positive");
     const auto start = std::chrono::steady_clock::now();
-    FF_RETURN_IF_ERROR(s.drawFrame(list, camera, width, height, 1, glm::vec4(s.options.backgroundLinear, 1.0f), stats));
     FF_RETURN_IF_ERROR(s.ensurePresentSource());
     glDisable(GL_FRAMEBUFFER_SRGB);
     glBindFramebuffer(GL_READ_FRAMEBUFFER, s.presentFramebuffer);
     glBindFramebuffer(GL_DRAW_FRAMEBUFFER, 0);
-    glBlitFramebuffer(0, 0, width, height, 0, 0, width, height, GL_COLOR_BUFFER_BIT, GL_NEAREST);
+    glBlitFramebuffer(0, 0, s.frameWidth, s.frameHeight, 0, 0, s.frameWidth, s.frameHeight, GL_COLOR_BUFFER_BIT,
+                      GL_NEAREST);
     glBindFramebuffer(GL_FRAMEBUFFER, 0);
     // Submission only: the swap that follows waits for the GPU, and the caller times frames.
-    stats.drawMs += std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+    stats.drawMs += millisecondsSince(start);
     if (const GLenum error = glGetError(); error != GL_NO_ERROR)
         return Status(ErrorCode::Internal, "OpenGL error " + std::to_string(error) + " while presenting");
     return Status::ok();

@@ -52,8 +52,8 @@ Status runForest(const ForestParams& p, const Scenario& scenario, const BenchOpt
         std::fprintf(stderr, "%s: %lld trees\n", scenario.name.c_str(), static_cast<long long>(trees));
         const std::filesystem::path scene = work / ("forest-" + std::to_string(trees) + ".ffs");
         FF_RETURN_IF_ERROR(buildGenerated("forest:trees=" + std::to_string(trees), scene));
-        FF_ASSIGN_OR_RETURN(auto file, storage::SceneFile::open(scene));
-        FF_ASSIGN_OR_RETURN(auto renderer, runtime::FrameRenderer::create(*file));
+        FF_ASSIGN_OR_RETURN(auto session, runtime::StreamingSession::open(scene));
+        const storage::SceneFile* file = &session->scene();
         const std::uint64_t triangles = file->header().instancedTriangles;
         const runtime::Camera camera = cornerCamera(*file);
 
@@ -63,13 +63,13 @@ Status runForest(const ForestParams& p, const Scenario& scenario, const BenchOpt
             runtime::SelectionOptions hierarchical;
             hierarchical.epsilonPixels = p.eps;
             FF_ASSIGN_OR_RETURN(const runtime::Frame hier,
-                                timeFrames(*renderer, camera, hierarchical, width, height, 1, options.timedFrames));
+                                timeFrames(*session, frameAt(camera, hierarchical, width, height), 1, options.timedFrames));
             double fullMs = 0.0;
             const bool measured = triangles <= fullMeasuredLimit;
             if (measured) {
                 runtime::SelectionOptions full;
                 full.method = runtime::Method::Full;
-                FF_ASSIGN_OR_RETURN(const runtime::Frame frame, timeFrames(*renderer, camera, full, width, height, 1, 1));
+                FF_ASSIGN_OR_RETURN(const runtime::Frame frame, timeFrames(*session, frameAt(camera, full, width, height), 1, 1));
                 fullMs = frame.stats.totalMs;
                 fullMsPerTriangle[si] = fullMs / static_cast<double>(triangles);
             } else {
@@ -81,8 +81,7 @@ Status runForest(const ForestParams& p, const Scenario& scenario, const BenchOpt
                           std::to_string(hier.stats.cubesDrawn), std::to_string(hier.stats.nodesVisited),
                           std::to_string(file->pageCount() * file->pageSize())});
         }
-        renderer.reset();
-        file.reset();
+        session.reset();
         std::filesystem::remove(scene);
     }
     const std::filesystem::path csv = options.outDir / (scenario.name + ".csv");

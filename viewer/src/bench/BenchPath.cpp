@@ -9,11 +9,9 @@
 #include "CameraOptions.h"
 #include "Percentile.h"
 #include "ScenarioParts.h"
-#include "StreamingPages.h"
 
-#include <ff/cache/PageCache.h>
-#include <ff/cache/ScenePageSource.h>
 #include <ff/runtime/CameraPathGenerators.h>
+#include <ff/runtime/FrameTelemetry.h>
 #include <ff/runtime/ImageMetrics.h>
 #include <ff/runtime/OffscreenContext.h>
 
@@ -49,35 +47,12 @@ Result<runtime::CameraPath> makePath(const PathSpec& p, const runtime::Bounds& b
     return runtime::makeOrbitPath(bounds, p.options);
 }
 
-/** The pages a method draws from: the memory map, or a cold streaming cache. */
-struct MethodPages {
-    std::optional<StreamingPages> streaming;
-    std::unique_ptr<runtime::FrameRenderer> renderer;
-};
-
-Result<MethodPages> openPages(
-        const PathParams& p,
-        const storage::SceneFile& file,
-        const std::filesystem::path& scenePath) {
-    MethodPages pages;
-    if (p.cache.cacheMb == 0) {
-        FF_ASSIGN_OR_RETURN(pages.renderer, runtime::FrameRenderer::create(file));
-        return pages;
-    }
-    FF_ASSIGN_OR_RETURN(
-            std::unique_ptr<cache::ScenePageSource> source,
-            cache::ScenePageSource::open(scenePath));
-    FF_ASSIGN_OR_RETURN(
-            StreamingPages streaming,
-            openStreaming(
-                    file,
-                    std::shared_ptr<cache::IPageSource>(std::move(source)),
-                    static_cast<std::uint64_t>(p.cache.cacheMb) << 20,
-                    static_cast<unsigned>(p.cache.ioThreads)));
-    pages.streaming = std::move(streaming);
-    FF_ASSIGN_OR_RETURN(
-            pages.renderer, runtime::FrameRenderer::create(file, *pages.streaming->access));
-    return pages;
+/** The session a method draws through: every page mapped, or a cold streaming cache. */
+Result<std::unique_ptr<runtime::StreamingSession>> openSession(const PathParams& p, const std::filesystem::path& scenePath) {
+    runtime::SessionOptions options;
+    options.cacheBytes = static_cast<std::uint64_t>(p.cache.cacheMb) << 20;
+    options.ioThreads = static_cast<unsigned>(p.cache.ioThreads);
+    return runtime::StreamingSession::open(scenePath, options);
 }
 
 Status runPath(const PathParams& p, const Scenario& scenario, const BenchOptions& options) {
@@ -87,15 +62,16 @@ Status runPath(const PathParams& p, const Scenario& scenario, const BenchOptions
     std::fprintf(stderr, "%s: building the scene\n", scenario.name.c_str());
     FF_RETURN_IF_ERROR(
             buildScene(p.scene, {}, scenePath, options.selfExe).status().withContext(scenario.where()));
-    FF_ASSIGN_OR_RETURN(auto file, storage::SceneFile::open(scenePath));
-    const runtime::Bounds bounds = sceneBounds(*file);
+    FF_ASSIGN_OR_RETURN(auto context, runtime::OffscreenContext::create());
+    // The reference of every frame: all geometry, every page mapped.
+    FF_ASSIGN_OR_RETURN(auto referenceSession, runtime::StreamingSession::open(scenePath));
+    const runtime::Bounds bounds = sceneBounds(referenceSession->scene());
     auto path = makePath(p.path, bounds);
     if (!path)
         return path.status().withContext(scenario.where() + ": path");
     const std::int64_t frames = path->frameCount();
     const int width = p.size[0];
     const int height = p.size[1];
-    FF_ASSIGN_OR_RETURN(auto context, runtime::OffscreenContext::create());
     auto cameraAt = [&](std::int64_t f) {
         runtime::Camera camera =
                 path->sample(path->frameTime(std::clamp<std::int64_t>(f, 0, frames - 1)));
@@ -111,31 +87,23 @@ Status runPath(const PathParams& p, const Scenario& scenario, const BenchOptions
             static_cast<long long>(frames));
     std::vector<runtime::Image> references;
     {
-        FF_ASSIGN_OR_RETURN(auto renderer, runtime::FrameRenderer::create(*file));
         runtime::SelectionOptions full;
         full.method = runtime::Method::Full;
         for (std::int64_t f = 0; f < frames; ++f) {
             FF_ASSIGN_OR_RETURN(
                     runtime::Frame frame,
-                    renderer->render(cameraAt(f), full, width, height, p.supersample));
+                    referenceSession->render(frameAt(cameraAt(f), full, width, height, p.supersample)));
             references.push_back(std::move(frame.image));
         }
     }
+    referenceSession.reset();
 
-    CsvTable perFrame(
-            {"method",
-             "frame",
-             "time_s",
-             "frame_ms",
-             "select_ms",
-             "draw_ms",
-             "triangles",
-             "cubes",
-             "nodes_deferred",
-             "resident_bytes",
-             "bytes_read",
-             "psnr_srgb",
-             "instability"});
+    // The session's telemetry, between the method and the instability of the frame pair.
+    std::vector<std::string> perFrameColumns = {"method"};
+    for (const std::string& name : runtime::telemetryColumnNames())
+        perFrameColumns.push_back(name);
+    perFrameColumns.push_back("instability");
+    CsvTable perFrame(perFrameColumns);
     CsvTable summary(
             {"method",
              "selection",
@@ -154,29 +122,23 @@ Status runPath(const PathParams& p, const Scenario& scenario, const BenchOptions
              "bytes_read"});
     for (const MethodSpec& method : p.methods) {
         std::fprintf(stderr, "%s: method %s\n", scenario.name.c_str(), method.label.c_str());
-        FF_ASSIGN_OR_RETURN(MethodPages pages, openPages(p, *file, scenePath));
-        cache::PageCache* pageCache = pages.streaming ? pages.streaming->cache.get() : nullptr;
+        FF_ASSIGN_OR_RETURN(std::unique_ptr<runtime::StreamingSession> session, openSession(p, scenePath));
         runtime::TemporalInstabilityAccumulator accumulator;
         std::vector<double> instability, psnr, frameMs;
         std::uint64_t debtFrames = 0;
         runtime::Image previous;
         for (std::int64_t f = 0; f < frames; ++f) {
-            double pumpMs = 0.0;
-            if (pageCache) {
-                if (p.cache.prefetchFrames > 0)
-                    pages.renderer->setPrefetchCamera(cameraAt(f + p.cache.prefetchFrames));
-                const auto start = std::chrono::steady_clock::now();
-                pageCache->pump(static_cast<std::size_t>(p.cache.uploadsPerFrame));
-                pumpMs = std::chrono::duration<double, std::milli>(
-                                 std::chrono::steady_clock::now() - start)
-                                 .count();
-            }
-            FF_ASSIGN_OR_RETURN(
-                    runtime::Frame frame,
-                    pages.renderer->render(cameraAt(f), method.selection, width, height));
+            if (session->streams() && p.cache.prefetchFrames > 0)
+                session->setPrefetchCamera(cameraAt(f + p.cache.prefetchFrames));
+            runtime::FrameContext frameContext = frameAt(cameraAt(f), method.selection, width, height);
+            frameContext.timeSeconds = path->frameTime(f);
+            frameContext.budgets.pageInstallsPerFrame = static_cast<std::size_t>(p.cache.uploadsPerFrame);
+            FF_ASSIGN_OR_RETURN(runtime::Frame frame, session->render(frameContext));
+            runtime::FrameTelemetry telemetry = session->lastFrame();
             const runtime::Image& reference = references[static_cast<std::size_t>(f)];
             FF_ASSIGN_OR_RETURN(
                     const runtime::ColorError color, runtime::colorError(frame.image, reference));
+            telemetry.psnrDb = color.psnrSrgb;
             std::string pairCell;
             if (f > 0) {
                 FF_ASSIGN_OR_RETURN(
@@ -190,24 +152,16 @@ Status runPath(const PathParams& p, const Scenario& scenario, const BenchOptions
                 instability.push_back(pair);
                 pairCell = formatNumber(pair, 6);
             }
-            const double ms = pumpMs + frame.stats.totalMs;
-            frameMs.push_back(ms);
+            // As before the streaming session: installing reads, selection and drawing (not the
+            // readback or the prefetch walk), so the percentiles stay comparable.
+            frameMs.push_back(telemetry.pumpMs + frame.stats.totalMs);
             psnr.push_back(color.psnrSrgb);
             debtFrames += frame.stats.nodesDeferred > 0 ? 1 : 0;
-            perFrame.addRow(
-                    {method.label,
-                     std::to_string(f),
-                     formatNumber(path->frameTime(f), 4),
-                     formatNumber(ms, 3),
-                     formatNumber(frame.stats.selectMs, 3),
-                     formatNumber(frame.stats.drawMs, 3),
-                     std::to_string(frame.stats.trianglesDrawn),
-                     std::to_string(frame.stats.cubesDrawn),
-                     std::to_string(frame.stats.nodesDeferred),
-                     std::to_string(pageCache ? pageCache->stats().residentBytes : 0),
-                     std::to_string(pageCache ? pageCache->stats().bytesRead : 0),
-                     formatNumber(color.psnrSrgb, 3),
-                     pairCell});
+            std::vector<std::string> row = {method.label};
+            for (std::string& cell : runtime::telemetryCsvCells(telemetry))
+                row.push_back(std::move(cell));
+            row.push_back(pairCell);
+            perFrame.addRow(std::move(row));
             previous = std::move(frame.image);
         }
         const runtime::TemporalInstability total = accumulator.result();
@@ -226,9 +180,8 @@ Status runPath(const PathParams& p, const Scenario& scenario, const BenchOptions
                  formatNumber(percentile(frameMs, 0.50), 3),
                  formatNumber(percentile(frameMs, 0.99), 3),
                  std::to_string(debtFrames),
-                 std::to_string(pageCache ? pageCache->stats().bytesRead : 0)});
+                 std::to_string(session->totals().bytesRead)});
     }
-    file.reset();
 
     const std::filesystem::path csv = options.outDir / (scenario.name + ".csv");
     FF_RETURN_IF_ERROR(perFrame.write(csv));

@@ -75,20 +75,29 @@ std::string formatNumber(double value, int decimals) {
     return text;
 }
 
-Result<runtime::Frame> timeFrames(
-        runtime::FrameRenderer& renderer,
+runtime::FrameContext frameAt(
         const runtime::Camera& camera,
         const runtime::SelectionOptions& selection,
         int width,
         int height,
-        int warmup,
-        int timed) {
+        int supersample) {
+    runtime::FrameContext frame;
+    frame.camera = camera;
+    frame.selection = selection;
+    frame.width = width;
+    frame.height = height;
+    frame.supersample = supersample;
+    return frame;
+}
+
+Result<runtime::Frame> timeFrames(
+        runtime::StreamingSession& session, const runtime::FrameContext& frameContext, int warmup, int timed) {
     for (int i = 0; i < warmup; ++i)
-        FF_RETURN_IF_ERROR(renderer.render(camera, selection, width, height).status());
+        FF_RETURN_IF_ERROR(session.render(frameContext).status());
     std::vector<double> total, select, draw;
     Result<runtime::Frame> frame = Status(ErrorCode::InvalidArgument, "no timed frame");
     for (int i = 0; i < std::max(timed, 1); ++i) {
-        frame = renderer.render(camera, selection, width, height);
+        frame = session.render(frameContext);
         if (!frame)
             return frame;
         total.push_back(frame->stats.totalMs);

@@ -1,7 +1,7 @@
 #pragma once
 
 #include <ff/runtime/Camera.h>
-#include <ff/runtime/FrameRenderer.h>
+#include <ff/runtime/StreamingSession.h>
 #include <ff/storage/Status.h>
 
 #include <nlohmann/json.hpp>
@@ -45,16 +45,18 @@ private:
     std::ofstream mOut;
 };
 
-/** Renders the view `warmup` times untimed, then `timed` times; returns the last frame with
- *  the median total/select/draw milliseconds in its stats. */
-[[nodiscard]] Result<runtime::Frame> timeFrames(
-        runtime::FrameRenderer& renderer,
+/** A frame at `camera` of width x height with `selection` (default budgets). */
+runtime::FrameContext frameAt(
         const runtime::Camera& camera,
         const runtime::SelectionOptions& selection,
         int width,
         int height,
-        int warmup,
-        int timed);
+        int supersample = 1);
+
+/** Renders the frame `warmup` times untimed, then `timed` times; returns the last frame with
+ *  the median total/select/draw milliseconds in its stats. */
+[[nodiscard]] Result<runtime::Frame> timeFrames(
+        runtime::StreamingSession& session, const runtime::FrameContext& frame, int warmup, int timed);
 
 /** A JSON object written by a child (a build report, a replay summary); Internal error naming
  *  `what` and the path if the file is missing or not an object. */

@@ -35,9 +35,9 @@ Status runTable2(const Table2Params& p, const Scenario& scenario, const BenchOpt
     const std::filesystem::path scene = work / "tree.ffs";
     std::fprintf(stderr, "%s: building %s\n", scenario.name.c_str(), p.generate.c_str());
     FF_RETURN_IF_ERROR(buildGenerated(p.generate, scene));
-    FF_ASSIGN_OR_RETURN(auto file, storage::SceneFile::open(scene));
     FF_ASSIGN_OR_RETURN(auto context, runtime::OffscreenContext::create());
-    FF_ASSIGN_OR_RETURN(auto renderer, runtime::FrameRenderer::create(*file));
+    FF_ASSIGN_OR_RETURN(auto session, runtime::StreamingSession::open(scene));
+    const storage::SceneFile* file = &session->scene();
     const runtime::Bounds bounds{{file->header().boundsMin[0], file->header().boundsMin[1], file->header().boundsMin[2]},
                                  {file->header().boundsMax[0], file->header().boundsMax[1], file->header().boundsMax[2]}};
 
@@ -54,11 +54,11 @@ Status runTable2(const Table2Params& p, const Scenario& scenario, const BenchOpt
             runtime::SelectionOptions hierarchical;
             hierarchical.epsilonPixels = p.eps;
             FF_ASSIGN_OR_RETURN(
-                    const runtime::Frame reference, renderer->render(camera, full, size[0], size[1], p.supersample));
+                    const runtime::Frame reference, session->render(frameAt(camera, full, size[0], size[1], p.supersample)));
             FF_ASSIGN_OR_RETURN(const runtime::Frame fullFrame,
-                                timeFrames(*renderer, camera, full, size[0], size[1], 1, options.timedFrames));
+                                timeFrames(*session, frameAt(camera, full, size[0], size[1]), 1, options.timedFrames));
             FF_ASSIGN_OR_RETURN(const runtime::Frame hierFrame,
-                                timeFrames(*renderer, camera, hierarchical, size[0], size[1], 1, options.timedFrames));
+                                timeFrames(*session, frameAt(camera, hierarchical, size[0], size[1]), 1, options.timedFrames));
             FF_ASSIGN_OR_RETURN(const runtime::ColorError hierError, runtime::colorError(hierFrame.image, reference.image));
             FF_ASSIGN_OR_RETURN(const runtime::ColorError fullError, runtime::colorError(fullFrame.image, reference.image));
             FF_ASSIGN_OR_RETURN(const double hierSsim, runtime::ssim(hierFrame.image, reference.image));

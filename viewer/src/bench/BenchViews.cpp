@@ -264,8 +264,8 @@ Status runViews(const ViewsParams& p, const Scenario& scenario, const BenchOptio
         FF_RETURN_IF_ERROR(buildScene(p.scene, extraFlags, scenePath, options.selfExe)
                                    .status()
                                    .withContext(scenario.where()));
-        FF_ASSIGN_OR_RETURN(auto file, storage::SceneFile::open(scenePath));
-        FF_ASSIGN_OR_RETURN(auto renderer, runtime::FrameRenderer::create(*file));
+        FF_ASSIGN_OR_RETURN(auto session, runtime::StreamingSession::open(scenePath));
+        const storage::SceneFile* file = &session->scene();
         const std::string sceneTriangles = std::to_string(file->header().instancedTriangles);
         const std::string sceneBytes = std::to_string(std::filesystem::file_size(scenePath));
         if (sceneSummary.empty())
@@ -280,7 +280,7 @@ Status runViews(const ViewsParams& p, const Scenario& scenario, const BenchOptio
             full.method = runtime::Method::Full;
             FF_ASSIGN_OR_RETURN(
                     const runtime::Frame reference,
-                    renderer->render(*camera, full, width, height, p.supersample));
+                    session->render(frameAt(*camera, full, width, height, p.supersample)));
             const std::uint64_t covered = coveredPixels(reference.image);
 
             for (const MethodSpec& method : p.methods) {
@@ -295,11 +295,8 @@ Status runViews(const ViewsParams& p, const Scenario& scenario, const BenchOptio
                     FF_ASSIGN_OR_RETURN(
                             const runtime::Frame frame,
                             timeFrames(
-                                    *renderer,
-                                    *camera,
-                                    m.selection,
-                                    width,
-                                    height,
+                                    *session,
+                                    frameAt(*camera, m.selection, width, height),
                                     1,
                                     options.timedFrames));
                     FF_ASSIGN_OR_RETURN(
@@ -337,8 +334,7 @@ Status runViews(const ViewsParams& p, const Scenario& scenario, const BenchOptio
                 }
             }
         }
-        renderer.reset();
-        file.reset();
+        session.reset();
         if (options.workDir.empty())
             std::filesystem::remove(scenePath);
     }

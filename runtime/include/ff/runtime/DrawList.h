@@ -3,14 +3,17 @@
 #include <glm/glm.hpp>
 
 #include <array>
+#include <cstddef>
 #include <cstdint>
 #include <vector>
 
 namespace ff::runtime {
 
-/** A run of triangles inside one Geometry page, drawn with transforms[transform]. */
+/** A run of triangles inside one Geometry page, drawn with transforms[transform]. Carries the
+ *  page's bytes, so the renderer uploads what it is given and looks nothing up again. */
 struct GeometryDraw {
-    std::uint64_t page;
+    std::uint64_t page;           ///< the GPU arena's key
+    const std::byte* payload;     ///< the page's payload (PackedTriangle slots), valid this frame
     std::uint32_t firstTriangle;
     std::uint32_t triangleCount;
     std::uint32_t transform;
@@ -25,8 +28,9 @@ struct CubeDraw {
 };
 
 /**
- * What one frame draws: opaque geometry (any order) and color cubes in back-to-front order.
- * Reused from frame to frame (cleared, not freed) so selection does not allocate.
+ * What one batch of a frame draws: opaque geometry (any order) and color cubes in back-to-front
+ * order. A traversal fills it up to FrameBudgets::drawBatchBytes and hands it to an IDrawSink;
+ * reused from batch to batch (cleared, not freed) so traversal does not allocate.
  */
 struct DrawList {
     std::vector<glm::mat4> transforms; ///< [0] is the identity
@@ -36,6 +40,12 @@ struct DrawList {
     std::vector<CubeDraw> cubes;
     /** Draw the cubes as area-weighted points (each covers at most a few pixels) rather than as faces. */
     bool cubesAsPoints = false;
+
+    /** Bytes the entries take now (what FrameBudgets::drawBatchBytes bounds). */
+    std::size_t bytes() const noexcept {
+        return transforms.size() * (sizeof(glm::mat4) + sizeof(glm::vec3)) + geometry.size() * sizeof(GeometryDraw) +
+               cubes.size() * sizeof(CubeDraw);
+    }
 
     void clear() {
         transforms.clear();

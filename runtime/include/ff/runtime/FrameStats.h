@@ -10,6 +10,7 @@ namespace ff::runtime {
 struct FrameStats {
     std::uint64_t nodesVisited = 0;  ///< node records read by selection
     std::uint64_t nodesCulled = 0;   ///< outside the frustum
+    std::uint64_t nodesOccluded = 0; ///< skipped because the renderer saw them Occluded
     std::uint64_t instancesEntered = 0; ///< instance nodes refined into their prototype
     std::uint64_t cubesDrawn = 0;
     std::uint64_t cubeFacesDrawn = 0; ///< front-facing faces of drawn cubes
@@ -21,9 +22,11 @@ struct FrameStats {
     /** Cells drawn coarser than the ε rule wanted because pages were not resident ("debt"). */
     std::uint64_t nodesDeferred = 0;
     std::uint64_t pagesMissing = 0; ///< page lookups that found no usable page (pending or failed)
-    double selectMs = 0.0;
-    double drawMs = 0.0;  ///< submission + GPU until finished (glFinish)
-    double totalMs = 0.0;
+    /** Geometry pages the frame's GPU upload budget refused (their cells were drawn as cubes). */
+    std::uint64_t uploadsRefused = 0;
+    double selectMs = 0.0; ///< traversal, not counting the batches the renderer drew meanwhile
+    double drawMs = 0.0;   ///< every batch's uploads and submission + GPU until finished (glFinish)
+    double totalMs = 0.0;  ///< selectMs + drawMs
 
     std::string toJson() const;
 };

@@ -4,7 +4,8 @@
 #include <ff/runtime/DrawList.h>
 #include <ff/runtime/FrameStats.h>
 #include <ff/runtime/Image.h>
-#include <ff/runtime/PageAccess.h>
+#include <ff/runtime/FrameContext.h>
+#include <ff/runtime/Traversal.h>
 #include <ff/storage/SceneFile.h>
 #include <ff/storage/Status.h>
 
@@ -22,40 +23,58 @@ struct RendererOptions {
     glm::vec3 backgroundLinear{0.70f, 0.75f, 0.83f};
 };
 
+/** Where a frame goes. */
+enum class FrameOutput {
+    Image,  ///< the renderer's own target, read back and resolved (coverage kept as alpha)
+    Window, ///< the default framebuffer (a window's back buffer), no readback
+};
+
 /**
- * Draws a DrawList with OpenGL 4.5 core: opaque geometry first (pages uploaded once into a GPU
- * page arena, drawn with one multi-draw per batch, instance transforms from a storage buffer),
- * then color cubes blended front-over-back in the list's back-to-front order, premultiplied, in
- * linear space (sRGB framebuffer). The same code runs under OSMesa and in a GLFW window.
+ * Draws a frame's DrawList batches with OpenGL 4.5 core: each batch's opaque geometry first
+ * (pages uploaded once into a GPU page arena, drawn with one multi-draw per arena batch, instance
+ * transforms from a storage buffer), then its color cubes blended front-over-back in the list's
+ * back-to-front order, premultiplied, in linear space (sRGB framebuffer). The same code runs
+ * under OSMesa and in a GLFW window.
+ *
+ * A frame is beginFrame(), draw() once per batch (the traversal's IDrawSink), then
+ * finishImage() or finishPresent(). It is also the traversal's IUploadGate: at most
+ * FrameBudgets::gpuUploadsPerFrame pages not yet in the arena are admitted per frame.
  *
  * Needs a current GL 4.5 context; main thread only.
  */
-class Renderer {
+class Renderer final : public IDrawSink, public IUploadGate {
 public:
-    /** Geometry pages are read through `pages`, which must outlive the renderer. */
     [[nodiscard]] static Result<std::unique_ptr<Renderer>> create(
-            const storage::SceneFile& scene, IPageAccess& pages, const RendererOptions& options = {});
-    ~Renderer();
+            const storage::SceneFile& scene, const RendererOptions& options = {});
+    ~Renderer() override;
     Renderer(const Renderer&) = delete;
     Renderer& operator=(const Renderer&) = delete;
 
     /**
-     * Renders at (width x supersample) x (height x supersample) and resolves to width x height.
-     * Adds pagesUploaded and drawMs to `stats`. Errors: Corrupt (a geometry page failed its
-     * checks), InvalidArgument (size), Internal (GL error).
+     * Starts a frame of frame.width x frame.height (x frame.supersample for an Image): sizes and
+     * clears the target (transparent for an Image, whose background is composited after the
+     * resolve; the opaque background for a Window) and resets the upload budget. Adds its time
+     * to stats.drawMs. Errors: InvalidArgument (size), Internal (GL).
      */
-    [[nodiscard]] Result<Image> render(
-            const DrawList& list, const Camera& camera, int width, int height, int supersample, FrameStats& stats);
+    [[nodiscard]] Status beginFrame(const FrameContext& frame, FrameOutput output, FrameStats& stats);
+
+    /** Draws one batch. Adds pagesUploaded and drawMs to `stats`. */
+    [[nodiscard]] Status draw(const DrawList& batch, FrameStats& stats) override;
+
+    /** Admits a geometry page for this frame (see the class comment). */
+    [[nodiscard]] bool admit(std::uint64_t geometryPage) override;
+
+    /** Waits for the GPU (counted in drawMs), reads the target back and resolves it to
+     *  width x height. Errors: Internal (GL error). */
+    [[nodiscard]] Result<Image> finishImage(FrameStats& stats);
 
     /**
-     * Draws the same frame as render(list, camera, width, height, 1, ...) into the default
-     * framebuffer (a window's back buffer) with no CPU readback: rendered over the opaque
-     * background in the renderer's own target, then blitted to (0, 0, width, height) of
-     * framebuffer 0. The window shows the same sRGB bytes as render()'s image (up to rounding of
-     * the background under blended cubes). Leaves framebuffer 0 bound, GL_FRAMEBUFFER_SRGB and
-     * blending off. Does not wait for the GPU (drawMs counts submission only). Errors as render().
+     * Copies the frame byte for byte to (0, 0, width, height) of framebuffer 0: the window shows
+     * the same sRGB bytes as an Image of the frame (up to rounding of the background under
+     * blended cubes). Leaves framebuffer 0 bound, GL_FRAMEBUFFER_SRGB and blending off. Does not
+     * wait for the GPU (drawMs counts submission only).
      */
-    [[nodiscard]] Status present(const DrawList& list, const Camera& camera, int width, int height, FrameStats& stats);
+    [[nodiscard]] Status finishPresent(FrameStats& stats);
 
     /** Bytes of the GPU page arena holding geometry pages now (at most the GPU budget). */
     [[nodiscard]] std::uint64_t residentBytes() const noexcept;

@@ -1,19 +1,13 @@
 #pragma once
 
-#include <ff/runtime/Camera.h>
-#include <ff/runtime/DrawList.h>
-#include <ff/runtime/FrameStats.h>
-#include <ff/runtime/Frustum.h>
-#include <ff/runtime/PageAccess.h>
-#include <ff/runtime/TransformMetric.h>
-#include <ff/storage/SceneFile.h>
-#include <ff/storage/Status.h>
+// What a user chooses about how a frame is drawn (--method, --epsilon, --cube-draw, ...): the
+// options every traversal reads, and the one table of their names.
 
-#include <cstdint>
+#include <ff/storage/SceneFormat.h>
+
 #include <optional>
 #include <string>
 #include <string_view>
-#include <unordered_set>
 #include <vector>
 
 namespace ff::runtime {
@@ -26,7 +20,9 @@ enum class Method {
 /** How color cubes reach the screen. */
 enum class CubeStyle {
     Faces,  ///< the visible faces as quads (Chamberlain et al.)
-    Points, ///< one point per cube: visible faces blended by projected area, alpha by coverage
+    /** One GL point per cube, its visible faces' colours weighted by their projected area and
+     *  alpha by coverage: a cube drawn small, not a splat (no footprint, no filtering). */
+    AreaWeightedPoints,
     Auto,   ///< points when ε <= 2 pixels (every drawn cube then covers at most 4 pixels), else faces
 };
 
@@ -69,77 +65,8 @@ struct SelectionOptions {
     /** Multiplies the priority of the pages this selection asks for (prefetch asks below the
      *  frame being drawn). */
     float priorityScale = 1.0f;
-    float viewportWidth = 640.0f;
-    float viewportHeight = 480.0f;
     /** If set, told of every drawn cube (borrowed; must outlive the select() calls). */
     ISelectionObserver* observer = nullptr;
-};
-
-/**
- * Per-frame selection (Chamberlain et al. '96, §3): walks the scene from the instance-level
- * root, skipping cells outside the frustum, drawing a cell as its color cube when its box
- * covers less than ε² pixels, a cell's own triangles when it is refined (each triangle once), and
- * children in back-to-front order. Instances enter their prototype's hierarchy with the
- * instance transform. CPU only: no GL here.
- *
- * Pages come through an IPageAccess and selection never waits for one: a cell whose children
- * or triangles are not Ready is drawn as its own cube instead (counted as debt in the stats)
- * and the missing pages are asked for, larger projected size first. A failed page leaves its
- * subtree drawn with the nearest resident ancestor's cube and is reported once.
- *
- * Main thread only. Scratch memory is reused between frames.
- */
-class Selection {
-public:
-    Selection(const storage::SceneFile& scene, IPageAccess& pages);
-
-    /** Fills `out` (cleared first) and the selection counters of `stats`. Errors only for what
-     *  leaves nothing to draw: the root page failed. */
-    [[nodiscard]] Status select(const Camera& camera, const SelectionOptions& options, DrawList& out, FrameStats& stats);
-
-    /** Failures first met during the last select() (each is reported once per Selection). */
-    const std::vector<Status>& newFailures() const noexcept { return mNewFailures; }
-
-private:
-    struct ChildEntry {
-        storage::NodeRecord record;
-        storage::NodeRef ref;
-        float distance;
-    };
-
-    enum class Fetch { Ready, Missing };
-
-    void visit(const storage::NodeRecord& node, storage::NodeRef ref, std::uint32_t transform, int depth);
-    /** Looks a page up; Failed pages are reported once and read as Missing. */
-    Fetch fetch(std::uint64_t page, storage::PageType type, float priority, std::span<const std::byte>& payload);
-    Fetch readNode(storage::NodeRef ref, float priority, storage::NodeRecord& out);
-    /** Appends the node's own geometry runs to mSegments if every page is Ready. */
-    Fetch collectGeometry(const storage::NodeRecord& node, float priority);
-    void emitCube(const storage::NodeRecord& node, storage::NodeRef ref, std::uint32_t transform);
-    void defer(const storage::NodeRecord& node, storage::NodeRef ref, std::uint32_t transform);
-    std::uint32_t pushTransform(const glm::mat4& transform);
-    void selectFull();
-    void mergeGeometryDraws();
-    void collectPrototypeGeometry(std::uint32_t prototype);
-    void reportFailure(const Status& failure);
-
-    const storage::SceneFile& mScene;
-    IPageAccess& mPages;
-    std::unordered_set<std::string> mReported; ///< messages ("page N: ...") already reported
-    std::vector<Status> mNewFailures;
-    // Per-frame state.
-    const Camera* mCamera = nullptr;
-    SelectionOptions mOptions;
-    DrawList* mOut = nullptr;
-    FrameStats* mStats = nullptr;
-    float mPixelScale = 1.0f;
-    std::vector<TransformMetric> mMetrics; ///< per transform: local sizes to world sizes
-    std::vector<Frustum> mFrusta; ///< per transform: the frustum in that local frame
-    std::vector<ChildEntry> mChildStack;
-    std::vector<storage::GeometrySegment> mSegments;
-    /** Full method: every geometry run of each prototype, merged per page (built on demand). */
-    std::vector<std::vector<storage::GeometrySegment>> mPrototypeGeometry;
-    std::vector<bool> mPrototypeGeometryReady;
 };
 
 } // namespace ff::runtime

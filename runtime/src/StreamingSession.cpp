@@ -1,0 +1,320 @@
+#include <ff/runtime/StreamingSession.h>
+
+#include "CachedPageAccess.h"
+
+#include <ff/cache/PageCache.h>
+#include <ff/cache/ScenePageSource.h>
+#include <ff/runtime/BackToFrontTraversal.h>
+#include <ff/runtime/PageAccess.h>
+
+#include <algorithm>
+#include <chrono>
+#include <mutex>
+#include <string>
+#include <unordered_set>
+
+namespace ff::runtime {
+
+namespace {
+
+double millisecondsSince(std::chrono::steady_clock::time_point start) {
+    return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+}
+
+/** Counts the distinct pages read through the source: the unique bytes a session needed. */
+class CountingSource final : public cache::IPageSource {
+public:
+    explicit CountingSource(std::shared_ptr<cache::IPageSource> inner) : mInner(std::move(inner)) {}
+    std::uint32_t pageSize() const override { return mInner->pageSize(); }
+    std::uint64_t pageCount() const override { return mInner->pageCount(); }
+    Status readPage(std::uint64_t index, std::span<std::byte> out) override {
+        {
+            std::lock_guard<std::mutex> lock(mMutex); // I/O threads read concurrently
+            mPages.insert(index);
+        }
+        return mInner->readPage(index, out);
+    }
+    std::uint64_t uniquePages() const {
+        std::lock_guard<std::mutex> lock(mMutex);
+        return mPages.size();
+    }
+
+private:
+    std::shared_ptr<cache::IPageSource> mInner;
+    mutable std::mutex mMutex;
+    std::unordered_set<std::uint64_t> mPages;
+};
+
+// Ends the page access's frame on every path out, so a failed frame still cancels the requests
+// it no longer wants.
+class FrameBracket {
+public:
+    explicit FrameBracket(IPageAccess& pages) : mPages(pages) { mPages.beginFrame(); }
+    ~FrameBracket() { mPages.endFrame(); }
+    FrameBracket(const FrameBracket&) = delete;
+    FrameBracket& operator=(const FrameBracket&) = delete;
+
+private:
+    IPageAccess& mPages;
+};
+
+} // namespace
+
+struct StreamingSession::Impl {
+    std::unique_ptr<storage::SceneFile> scene;
+    std::shared_ptr<CountingSource> counting;
+    std::unique_ptr<cache::PageCache> cache;
+    std::unique_ptr<IPageAccess> pages;
+    CachedPageAccess* cachedPages = nullptr; ///< pages, when streaming
+    std::unique_ptr<BackToFrontTraversal> traversal;
+    std::unique_ptr<BackToFrontTraversal> prefetchTraversal; ///< its own failures and scratch
+    std::unique_ptr<Renderer> renderer;
+    RendererOptions rendererOptions;
+    NoVisibility visibility;
+    std::optional<Camera> prefetchCamera;
+    FrameTelemetry last;
+    cache::PageCacheStats previous{}; ///< the cache's counters at the end of the last frame
+    std::int64_t frames = 0;
+    std::uint64_t peakResidentBytes = 0;
+    std::vector<Status> failures; ///< first met during the last frame call
+
+    /** pump → traverse → draw → finish → prefetch, inside one page-access frame. */
+    template <typename Finish>
+    Status frame(const FrameContext& context, FrameOutput output, FrameStats& stats, double& prefetchMs,
+                 Finish&& finish);
+    void prefetch(const FrameContext& context, double& prefetchMs);
+    void pump(std::size_t installs, double& pumpMs);
+    void record(const FrameContext& context, const FrameStats& stats, double frameMs, double pumpMs,
+                double prefetchMs, bool stalled);
+};
+
+StreamingSession::StreamingSession(std::unique_ptr<Impl> impl) : mImpl(std::move(impl)) {}
+StreamingSession::~StreamingSession() = default;
+
+Result<std::unique_ptr<StreamingSession>> StreamingSession::open(
+        const std::filesystem::path& scenePath, const SessionOptions& options) {
+    auto impl = std::make_unique<Impl>();
+    FF_ASSIGN_OR_RETURN(impl->scene, storage::SceneFile::open(scenePath));
+    const storage::SceneFile& scene = *impl->scene;
+    if (options.cacheBytes == 0) {
+        impl->pages = std::make_unique<MappedPageAccess>(scene);
+    } else {
+        const auto rootTooLarge = [&] {
+            return Status(ErrorCode::OutOfBudget, "--cache-mb " + std::to_string(options.cacheBytes >> 20) +
+                                                          " cannot hold the scene's root page (" +
+                                                          std::to_string(scene.pageSize() >> 10) + " KiB)");
+        };
+        if (options.cacheBytes < scene.pageSize())
+            return rootTooLarge();
+        FF_ASSIGN_OR_RETURN(std::unique_ptr<cache::ScenePageSource> source, cache::ScenePageSource::open(scenePath));
+        impl->counting = std::make_shared<CountingSource>(std::move(source));
+        cache::PageCacheOptions cacheOptions;
+        cacheOptions.budgetBytes = options.cacheBytes;
+        cacheOptions.ioThreads = options.ioThreads;
+        cacheOptions.maxInFlight = std::max(cacheOptions.maxInFlight, options.maxInFlight);
+        // A frame that needs more than the budget keeps the cut it has instead of reading pages
+        // it can only drop (docs/methods.md, "At the budget's edge").
+        cacheOptions.readOnlyWhatFits = true;
+        FF_ASSIGN_OR_RETURN(impl->cache, cache::PageCache::create(impl->counting, cacheOptions));
+        const std::uint64_t rootPage = scene.header().root.page;
+        impl->cache->request(rootPage, 1e30f);
+        impl->cache->drain();
+        if (impl->cache->state(rootPage) == cache::PageState::Failed)
+            return impl->cache->failure(rootPage).value_or(Status(ErrorCode::IoError, "the root page is unreadable"));
+        if (impl->cache->state(rootPage) != cache::PageState::Resident)
+            return rootTooLarge();
+        auto cached = std::make_unique<CachedPageAccess>(*impl->cache, scene.pageSize());
+        impl->cachedPages = cached.get();
+        impl->pages = std::move(cached);
+    }
+    impl->traversal = std::make_unique<BackToFrontTraversal>(scene, *impl->pages);
+    impl->prefetchTraversal = std::make_unique<BackToFrontTraversal>(scene, *impl->pages);
+    impl->rendererOptions = options.renderer;
+    FF_ASSIGN_OR_RETURN(impl->renderer, Renderer::create(scene, options.renderer));
+    return std::unique_ptr<StreamingSession>(new StreamingSession(std::move(impl)));
+}
+
+const storage::SceneFile& StreamingSession::scene() const noexcept { return *mImpl->scene; }
+bool StreamingSession::streams() const noexcept { return mImpl->cache != nullptr; }
+
+void StreamingSession::Impl::pump(std::size_t installs, double& pumpMs) {
+    if (!cache)
+        return;
+    const auto start = std::chrono::steady_clock::now();
+    cache->pump(installs);
+    pumpMs += millisecondsSince(start);
+}
+
+void StreamingSession::Impl::prefetch(const FrameContext& context, double& prefetchMs) {
+    if (!prefetchCamera || !cache)
+        return;
+    const auto start = std::chrono::steady_clock::now();
+    FrameContext ahead = context;
+    ahead.camera = *prefetchCamera;
+    ahead.selection.priorityScale *= 0.25f;
+    ahead.selection.observer = nullptr;
+    DiscardingSink discard;
+    AdmitAll admitAll;
+    FrameStats ignored;
+    // Its only effect is the page requests its lookups make; what it would draw is dropped.
+    (void)prefetchTraversal->traverse(ahead, {discard, visibility, admitAll}, ignored);
+    prefetchMs += millisecondsSince(start);
+}
+
+template <typename Finish>
+Status StreamingSession::Impl::frame(const FrameContext& context, FrameOutput output, FrameStats& stats,
+                                     double& prefetchMs, Finish&& finish) {
+    const FrameBracket bracket(*pages);
+    FF_RETURN_IF_ERROR(renderer->beginFrame(context, output, stats));
+    const double drawBefore = stats.drawMs;
+    const auto start = std::chrono::steady_clock::now();
+    const Status walked = traversal->traverse(context, {*renderer, visibility, *renderer}, stats);
+    const auto& fresh = traversal->newFailures();
+    failures.insert(failures.end(), fresh.begin(), fresh.end());
+    FF_RETURN_IF_ERROR(walked);
+    // The batches the renderer drew during the walk are draw time, not selection.
+    stats.selectMs = millisecondsSince(start) - (stats.drawMs - drawBefore);
+    FF_RETURN_IF_ERROR(finish());
+    prefetch(context, prefetchMs);
+    stats.totalMs = stats.selectMs + stats.drawMs;
+    return Status::ok();
+}
+
+void StreamingSession::Impl::record(const FrameContext& context, const FrameStats& stats, double frameMs,
+                                    double pumpMs, double prefetchMs, bool stalled) {
+    FrameTelemetry t;
+    t.frame = frames++;
+    t.timeSeconds = context.timeSeconds;
+    t.frameMs = frameMs;
+    t.pumpMs = pumpMs;
+    t.prefetchMs = prefetchMs;
+    t.stats = stats;
+    t.stalled = stalled;
+    t.gpuResidentBytes = renderer->residentBytes();
+    if (cache) {
+        const cache::PageCacheStats& now = cache->stats();
+        t.requests = now.requests - previous.requests;
+        t.hits = now.hits - previous.hits;
+        t.misses = now.misses - previous.misses;
+        t.bytesRead = now.bytesRead - previous.bytesRead;
+        t.bytesReadTotal = now.bytesRead;
+        t.residentBytes = now.residentBytes;
+        peakResidentBytes = std::max(peakResidentBytes, now.residentBytes);
+        t.inFlight = now.inFlight;
+        t.evicted = now.evicted - previous.evicted;
+        t.dropped = now.dropped - previous.dropped;
+        t.cancelled = now.cancelled - previous.cancelled;
+        t.refused = now.refused - previous.refused;
+        t.noRoom = now.noRoom - previous.noRoom;
+        const FramePageUse& used = cachedPages->framePageUse();
+        t.nodePageBytes = used.nodePages * scene->pageSize();
+        t.geometryPageBytes = used.geometryPages * scene->pageSize();
+        previous = now;
+    }
+    last = t;
+}
+
+Result<Frame> StreamingSession::render(const FrameContext& context) {
+    Impl& s = *mImpl;
+    s.failures.clear();
+    const auto start = std::chrono::steady_clock::now();
+    double pumpMs = 0.0;
+    double prefetchMs = 0.0;
+    s.pump(context.budgets.pageInstallsPerFrame, pumpMs);
+    Frame result;
+    FF_RETURN_IF_ERROR(s.frame(context, FrameOutput::Image, result.stats, prefetchMs, [&]() -> Status {
+        FF_ASSIGN_OR_RETURN(result.image, s.renderer->finishImage(result.stats));
+        return Status::ok();
+    }));
+    s.record(context, result.stats, millisecondsSince(start), pumpMs, prefetchMs, false);
+    return result;
+}
+
+Result<Frame> StreamingSession::renderComplete(const FrameContext& context) {
+    Impl& s = *mImpl;
+    s.failures.clear();
+    const auto start = std::chrono::steady_clock::now();
+    double pumpMs = 0.0;
+    double prefetchMs = 0.0;
+    s.pump(context.budgets.pageInstallsPerFrame, pumpMs);
+    Frame result;
+    const auto once = [&]() -> Status {
+        result.stats = {};
+        return s.frame(context, FrameOutput::Image, result.stats, prefetchMs, [&]() -> Status {
+            FF_ASSIGN_OR_RETURN(result.image, s.renderer->finishImage(result.stats));
+            return Status::ok();
+        });
+    };
+    FF_RETURN_IF_ERROR(once());
+    bool stalled = false;
+    while (s.cache && result.stats.nodesDeferred > 0) {
+        const std::uint64_t before = s.cache->stats().completed;
+        s.cache->drain();
+        stalled = true;
+        FF_RETURN_IF_ERROR(once());
+        if (s.cache->stats().completed == before)
+            break; // nothing more fits the budget: this frame is as good as it gets
+    }
+    s.record(context, result.stats, millisecondsSince(start), pumpMs, prefetchMs, stalled);
+    return result;
+}
+
+Result<FrameStats> StreamingSession::present(const FrameContext& context) {
+    Impl& s = *mImpl;
+    s.failures.clear();
+    const auto start = std::chrono::steady_clock::now();
+    double pumpMs = 0.0;
+    double prefetchMs = 0.0;
+    s.pump(context.budgets.pageInstallsPerFrame, pumpMs);
+    FrameStats stats;
+    FF_RETURN_IF_ERROR(s.frame(context, FrameOutput::Window, stats, prefetchMs,
+                               [&] { return s.renderer->finishPresent(stats); }));
+    s.record(context, stats, millisecondsSince(start), pumpMs, prefetchMs, false);
+    return stats;
+}
+
+void StreamingSession::setPrefetchCamera(std::optional<Camera> camera) { mImpl->prefetchCamera = camera; }
+
+void StreamingSession::setCacheBudget(std::uint64_t bytes) {
+    if (mImpl->cache)
+        mImpl->cache->setBudget(std::max<std::uint64_t>(bytes, mImpl->scene->pageSize()));
+}
+
+std::uint64_t StreamingSession::cacheBudget() const noexcept {
+    return mImpl->cache ? mImpl->cache->budgetBytes() : 0;
+}
+
+Status StreamingSession::setGpuBudget(std::uint64_t bytes) {
+    Impl& s = *mImpl;
+    s.renderer.reset(); // frees the old page arena before the new one is allocated
+    s.rendererOptions.gpuBudgetBytes = bytes;
+    FF_ASSIGN_OR_RETURN(s.renderer, Renderer::create(*s.scene, s.rendererOptions));
+    return Status::ok();
+}
+
+const FrameTelemetry& StreamingSession::lastFrame() const noexcept { return mImpl->last; }
+
+SessionTotals StreamingSession::totals() const {
+    const Impl& s = *mImpl;
+    SessionTotals t;
+    t.frames = static_cast<std::uint64_t>(s.frames);
+    if (!s.cache)
+        return t;
+    const cache::PageCacheStats& c = s.cache->stats();
+    t.requests = c.requests;
+    t.cancelled = c.cancelled;
+    t.refused = c.refused;
+    t.noRoom = c.noRoom;
+    t.evicted = c.evicted;
+    t.dropped = c.dropped;
+    t.completed = c.completed;
+    t.bytesRead = c.bytesRead;
+    t.uniqueBytes = s.counting->uniquePages() * s.scene->pageSize();
+    t.peakResidentBytes = s.peakResidentBytes;
+    t.budgetBytes = s.cache->budgetBytes();
+    return t;
+}
+
+const std::vector<Status>& StreamingSession::newFailures() const noexcept { return mImpl->failures; }
+
+} // namespace ff::runtime
