@@ -2,6 +2,8 @@
 
 #include "Units.h"
 
+#include <ff/runtime/GlProgram.h>
+
 #include <glad/gl.h>
 #include <stb_easy_font.h>
 
@@ -41,20 +43,6 @@ in vec4 vColor;
 layout(location = 0) out vec4 fragColor;
 void main() { fragColor = vColor; }
 )";
-
-GLuint compile(GLenum type, const char* source, std::string& log) {
-    const GLuint shader = glCreateShader(type);
-    glShaderSource(shader, 1, &source, nullptr);
-    glCompileShader(shader);
-    GLint ok = 0;
-    glGetShaderiv(shader, GL_COMPILE_STATUS, &ok);
-    if (!ok) {
-        char text[1024] = {};
-        glGetShaderInfoLog(shader, sizeof(text), nullptr, text);
-        log = text;
-    }
-    return shader;
-}
 
 // Appends rather than inserting: GCC 12 reports a false -Wrestrict (its bug 105329) for
 // std::string::insert once inlined in a Release build.
@@ -112,19 +100,10 @@ std::string formatHud(const HudInfo& info) {
 
 Result<std::unique_ptr<Hud>> Hud::create() {
     std::unique_ptr<Hud> hud(new Hud());
-    std::string log;
-    const GLuint vs = compile(GL_VERTEX_SHADER, kVertexShader, log);
-    const GLuint fs = compile(GL_FRAGMENT_SHADER, kFragmentShader, log);
-    hud->mProgram = glCreateProgram();
-    glAttachShader(hud->mProgram, vs);
-    glAttachShader(hud->mProgram, fs);
-    glLinkProgram(hud->mProgram);
-    glDeleteShader(vs);
-    glDeleteShader(fs);
-    GLint linked = 0;
-    glGetProgramiv(hud->mProgram, GL_LINK_STATUS, &linked);
-    if (!log.empty() || !linked)
-        return Status(ErrorCode::Internal, "HUD shaders failed: " + log);
+    Result<std::uint32_t> program = runtime::linkGlProgram({kVertexShader}, kFragmentShader);
+    if (!program)
+        return program.status().withContext("HUD");
+    hud->mProgram = *program;
 
     GLuint buffers[2];
     glGenBuffers(2, buffers);

@@ -18,8 +18,9 @@ std::string formatHud(const HudInfo& info);
 
 /**
  * Text over the window's top-left corner on a translucent panel, drawn with stb_easy_font's
- * quads by a tiny GL 4.5 core program of its own (no legacy GL). Draws into framebuffer 0 after
- * Renderer::present(); needs the window's context current. Main thread only.
+ * quads by a tiny GL 4.5 core program built through the runtime's GL layer (no legacy GL).
+ * Draws into framebuffer 0 after StreamingSession::present(); needs the window's context
+ * current. Main thread only.
  */
 class Hud {
 public:

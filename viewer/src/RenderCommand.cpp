@@ -1,5 +1,6 @@
 #include "CameraOptions.h"
 #include "Commands.h"
+#include "FrameFlags.h"
 #include "OutputFile.h"
 #include "Units.h"
 
@@ -128,20 +129,15 @@ CommandRunner addRenderCommand(CLI::App& app) {
     cmd->add_option("scene", args->scene, "Scene file (.ffs)")->required();
     cmd->add_option("-o,--output", args->output, "Image to write (.png, .exr, .tif, ...)");
     cmd->add_option("--size", args->size, "Image size WIDTHxHEIGHT")->capture_default_str();
-    cmd->add_option("--epsilon", args->epsilon, "A cell whose box covers less than epsilon^2 pixels on screen is drawn as its color cube (0: all geometry)")->capture_default_str();
-    cmd->add_option("--method", args->method, "hierarchical or full (every triangle, no hierarchy)")->capture_default_str();
-    cmd->add_option("--cube-draw", args->cubeDraw, "Color cubes as faces, points (one splat per cube) or auto (points when epsilon <= 2)")
-            ->capture_default_str()
-            ->check(CLI::IsMember(runtime::cubeStyleNames()));
-    cmd->add_option("--cube-anisotropy", args->cubeAnisotropy,
-                    "Refuse colour cubes whose coverage differs more than this between axes (0..1; 1 = never)")
-            ->check(CLI::Range(0.0f, 1.0f))
-            ->capture_default_str();
+    addEpsilonOption(*cmd, args->epsilon);
+    addMethodOption(*cmd, args->method);
+    addCubeDrawOption(*cmd, args->cubeDraw);
+    addCubeAnisotropyOption(*cmd, args->cubeAnisotropy);
     cmd->add_option("--supersample", args->supersample, "Render NxN samples per pixel (a reference)")->capture_default_str();
     cmd->add_option("--frames", args->frames, "Render the view this many times (timing; first frame uploads)")->capture_default_str();
     cmd->add_option("--stats", args->stats, "Write the per-frame statistics as JSON here (also printed on stdout)");
-    cmd->add_option("--background", args->background, "Background colour, linear r,g,b")->capture_default_str();
-    cmd->add_option("--gpu-budget", args->gpuBudget, "GPU memory for geometry pages")->capture_default_str();
+    addBackgroundOption(*cmd, args->background);
+    addGpuBudgetOption(*cmd, args->gpuBudget);
     cmd->add_flag("--coverage-alpha", args->coverage, "Keep coverage as the image's alpha channel");
     args->camera.addTo(*cmd);
     return [args]() { return runRender(*args); };

@@ -4,6 +4,7 @@
 
 #include "CameraOptions.h"
 #include "Commands.h"
+#include "FrameFlags.h"
 #include "ImageOutput.h"
 #include "OutputFile.h"
 #include "Percentile.h"
@@ -292,20 +293,15 @@ CommandRunner addReplayCommand(CLI::App& app) {
     cmd->add_option("scene", args->scene, "Scene file (.ffs)")->required();
     cmd->add_option("path", args->path, "Camera path (.json, see `farfield path`)")->required();
     cmd->add_option("--cache-mb", args->cacheMb, "Hard budget for resident pages, MiB")->capture_default_str();
-    cmd->add_option("--gpu-budget", args->gpuBudget, "GPU memory for geometry pages")->capture_default_str();
+    addGpuBudgetOption(*cmd, args->gpuBudget);
     cmd->add_flag("--sync", args->sync, "Wait for every page a frame wants (deterministic reference; counts stalls)");
     cmd->add_option("--size", args->size, "Image size WIDTHxHEIGHT")->capture_default_str();
-    cmd->add_option("--epsilon", args->epsilon, "A cell whose box covers less than epsilon^2 pixels on screen is drawn as its color cube")->capture_default_str();
-    cmd->add_option("--cube-anisotropy", args->cubeAnisotropy,
-                    "Refuse colour cubes whose coverage differs more than this between axes (0..1; 1 = never)")
-            ->check(CLI::Range(0.0f, 1.0f))
-            ->capture_default_str();
+    addEpsilonOption(*cmd, args->epsilon);
+    addCubeAnisotropyOption(*cmd, args->cubeAnisotropy);
     cmd->add_option("--io-threads", args->ioThreads, "Background read threads")->capture_default_str();
     cmd->add_option("--uploads-per-frame", args->uploadsPerFrame, "Finished reads installed per frame at most (also the reads under way at most, if above 64)")
             ->capture_default_str();
-    cmd->add_option("--gpu-uploads-per-frame", args->gpuUploadsPerFrame,
-                    "Geometry pages uploaded to the GPU per frame at most; cells over it are drawn as cubes (0: no bound; --sync: none)")
-            ->capture_default_str();
+    addGpuUploadsOption(*cmd, args->gpuUploadsPerFrame); // --sync: no bound
     cmd->add_option("--prefetch-frames", args->prefetchFrames,
                     "Also ask for the pages of the view this many frames ahead on the path (0: off)")
             ->capture_default_str();

@@ -1,4 +1,5 @@
 #include "Commands.h"
+#include "FrameFlags.h"
 #include "OutputFile.h"
 #include "SceneStats.h"
 #include "Units.h"
@@ -221,8 +222,7 @@ CommandRunner addStatsCommand(CLI::App& app) {
     cmd->add_option("--frames", args->frames, "Frames per path for --paths")
             ->check(CLI::Range(1, 100000))
             ->capture_default_str();
-    cmd->add_option("--epsilon", args->epsilon, "Pixel threshold of the cube rule for --paths")
-            ->capture_default_str();
+    addEpsilonOption(*cmd, args->epsilon)->description(std::string("With --paths: ") + kEpsilonHelp);
     cmd->add_option("--size", args->size, "Viewport WIDTHxHEIGHT for --paths")
             ->capture_default_str();
     inputOption->excludes(args->inputBytesOption);

@@ -1,6 +1,7 @@
 #include "CameraController.h"
 #include "CameraOptions.h"
 #include "Commands.h"
+#include "FrameFlags.h"
 #include "Hud.h"
 #include "OutputFile.h"
 #include "Units.h"
@@ -346,24 +347,15 @@ CommandRunner addViewCommand(CLI::App& app) {
                 "and exit 1.");
     cmd->add_option("scene", args->scene, "Scene file (.ffs)")->required();
     cmd->add_option("--size", args->size, "Window size WIDTHxHEIGHT")->capture_default_str();
-    cmd->add_option(
-               "--epsilon",
-               args->epsilon,
-               "A cell whose box covers less than epsilon^2 pixels on screen is drawn as its color cube (0: all geometry)")
-            ->capture_default_str();
-    cmd->add_option("--method", args->method, "hierarchical or full (every triangle, no hierarchy)")
-            ->capture_default_str();
+    addEpsilonOption(*cmd, args->epsilon);
+    addMethodOption(*cmd, args->method);
     cmd->add_option("--cache-mb", args->cacheMb, "Stream pages through a page cache of this many MiB (0: map everything)")
             ->capture_default_str();
     cmd->add_option("--uploads-per-frame", args->uploadsPerFrame, "Finished page reads installed per frame at most")
             ->capture_default_str();
-    cmd->add_option("--gpu-uploads-per-frame", args->gpuUploadsPerFrame,
-                    "Geometry pages uploaded to the GPU per frame at most; cells over it are drawn as cubes (0: no bound)")
-            ->capture_default_str();
-    cmd->add_option("--gpu-budget", args->gpuBudget, "GPU memory for geometry pages")
-            ->capture_default_str();
-    cmd->add_option("--background", args->background, "Background colour, linear r,g,b")
-            ->capture_default_str();
+    addGpuUploadsOption(*cmd, args->gpuUploadsPerFrame);
+    addGpuBudgetOption(*cmd, args->gpuBudget);
+    addBackgroundOption(*cmd, args->background);
     cmd->add_option(
                "--frames",
                args->frames,

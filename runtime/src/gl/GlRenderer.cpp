@@ -3,6 +3,8 @@
 #include "GlHeaders.h"
 #include "Shaders.h"
 
+#include <ff/runtime/GlProgram.h>
+
 #include <ff/cache/PageLru.h>
 #include <ff/storage/ShadingModel.h>
 
@@ -26,51 +28,6 @@ struct IndirectCommand {
     GLuint first;
     GLuint baseInstance;
 };
-
-// `sources` are concatenated, as glShaderSource does with several strings.
-Result<GLuint> compileShader(GLenum type, std::initializer_list<const char*> sources) {
-    const GLuint shader = glCreateShader(type);
-    glShaderSource(shader, static_cast<GLsizei>(sources.size()), sources.begin(), nullptr);
-    glCompileShader(shader);
-    GLint ok = 0;
-    glGetShaderiv(shader, GL_COMPILE_STATUS, &ok);
-    if (!ok) {
-        std::string log(4096, '\0');
-        GLsizei length = 0;
-        glGetShaderInfoLog(shader, static_cast<GLsizei>(log.size()), &length, log.data());
-        log.resize(static_cast<std::size_t>(length));
-        glDeleteShader(shader);
-        return Status(ErrorCode::Internal, "shader compilation failed: " + log);
-    }
-    return shader;
-}
-
-Result<GLuint> linkProgram(std::initializer_list<const char*> vertexSources, const char* fragmentSource) {
-    FF_ASSIGN_OR_RETURN(const GLuint vs, compileShader(GL_VERTEX_SHADER, vertexSources));
-    Result<GLuint> compiledFs = compileShader(GL_FRAGMENT_SHADER, {fragmentSource});
-    if (!compiledFs) {
-        glDeleteShader(vs);
-        return compiledFs.status();
-    }
-    const GLuint fs = *compiledFs;
-    const GLuint program = glCreateProgram();
-    glAttachShader(program, vs);
-    glAttachShader(program, fs);
-    glLinkProgram(program);
-    glDeleteShader(vs);
-    glDeleteShader(fs);
-    GLint ok = 0;
-    glGetProgramiv(program, GL_LINK_STATUS, &ok);
-    if (!ok) {
-        std::string log(4096, '\0');
-        GLsizei length = 0;
-        glGetProgramInfoLog(program, static_cast<GLsizei>(log.size()), &length, log.data());
-        log.resize(static_cast<std::size_t>(length));
-        glDeleteProgram(program);
-        return Status(ErrorCode::Internal, "shader link failed: " + log);
-    }
-    return program;
-}
 
 // Bind-to-edit rather than direct state access: OSMesa exports the GL 4.3 entry points but
 // not the 4.5 DSA ones, and farfield links GL functions directly (no loader).
@@ -170,9 +127,9 @@ Renderer::~Renderer() = default;
 Result<std::unique_ptr<Renderer>> Renderer::create(const storage::SceneFile& scene, const RendererOptions& options) {
     auto impl = std::make_unique<Impl>();
     impl->options = options;
-    FF_ASSIGN_OR_RETURN(impl->geometryProgram, linkProgram({gl::kGeometryVertexShader}, gl::kGeometryFragmentShader));
-    FF_ASSIGN_OR_RETURN(impl->cubeProgram, linkProgram({gl::kCubeShaderInputs, gl::kCubeVertexShader}, gl::kCubeFragmentShader));
-    FF_ASSIGN_OR_RETURN(impl->cubePointProgram, linkProgram({gl::kCubeShaderInputs, gl::kCubePointVertexShader}, gl::kCubeFragmentShader));
+    FF_ASSIGN_OR_RETURN(impl->geometryProgram, linkGlProgram({gl::kGeometryVertexShader}, gl::kGeometryFragmentShader));
+    FF_ASSIGN_OR_RETURN(impl->cubeProgram, linkGlProgram({gl::kCubeShaderInputs, gl::kCubeVertexShader}, gl::kCubeFragmentShader));
+    FF_ASSIGN_OR_RETURN(impl->cubePointProgram, linkGlProgram({gl::kCubeShaderInputs, gl::kCubePointVertexShader}, gl::kCubeFragmentShader));
 
     // Slots hold a page's triangles without its trailer, so vertex offsets stay whole vertices.
     const std::uint32_t trianglesPerPage = storage::trianglesPerPage(scene.pageSize());

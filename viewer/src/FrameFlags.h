@@ -1,0 +1,23 @@
+#pragma once
+
+// The flags several verbs share (render, replay, view, stats), each defined once: the same name,
+// help text, default display and check everywhere.
+
+#include <CLI/CLI.hpp>
+
+#include <cstdint>
+#include <string>
+
+namespace ff::viewer {
+
+extern const char* const kEpsilonHelp;
+
+CLI::Option* addEpsilonOption(CLI::App& cmd, float& epsilon);
+CLI::Option* addMethodOption(CLI::App& cmd, std::string& method);
+CLI::Option* addCubeDrawOption(CLI::App& cmd, std::string& cubeDraw);
+CLI::Option* addCubeAnisotropyOption(CLI::App& cmd, float& anisotropy);
+CLI::Option* addGpuBudgetOption(CLI::App& cmd, std::string& gpuBudget);
+CLI::Option* addGpuUploadsOption(CLI::App& cmd, std::uint32_t& uploads);
+CLI::Option* addBackgroundOption(CLI::App& cmd, std::string& background);
+
+} // namespace ff::viewer
