@@ -4,7 +4,7 @@
 
 #include "Commands.h"
 #include "OutputFile.h"
-#include "bench/Benchmarks.h"
+#include <ff/bench/Benchmarks.h>
 
 #include <unistd.h>
 
@@ -147,29 +147,6 @@ int runBench(const BenchArgs& args) {
 
 } // namespace
 
-namespace bench {
-
-Result<BenchRun> prepareScenario(const Scenario& scenario) {
-    if (scenario.kind == "table2")
-        return prepareTable2(scenario);
-    if (scenario.kind == "forest")
-        return prepareForest(scenario);
-    if (scenario.kind == "build")
-        return prepareBuild(scenario);
-    if (scenario.kind == "paging")
-        return preparePaging(scenario);
-    if (scenario.kind == "views")
-        return prepareViews(scenario);
-    if (scenario.kind == "path")
-        return preparePath(scenario);
-    if (scenario.kind == "replay")
-        return prepareReplay(scenario);
-    return Status(
-            ErrorCode::InvalidArgument,
-            scenario.where() + ": unknown kind \"" + scenario.kind + "\"");
-}
-
-} // namespace bench
 
 CommandRunner addBenchCommand(CLI::App& app) {
     auto args = std::make_shared<BenchArgs>();

@@ -2,7 +2,7 @@
 #include "OutputFile.h"
 #include "ProgressBar.h"
 #include "SceneInput.h"
-#include "Units.h"
+#include <ff/runtime/Units.h>
 
 #include <ff/builder/Generators.h>
 #include <ff/builder/SceneBuilder.h>
@@ -55,12 +55,12 @@ int runBuild(const BuildArgs& args) {
     if (args.input.empty() == args.generate.empty())
         return reportError("build", Status(ErrorCode::InvalidArgument, "give either an input glTF file or --generate"));
     builder::BuildOptions options;
-    auto budget = parseByteSize(args.memoryBudget);
+    auto budget = runtime::parseByteSize(args.memoryBudget);
     if (!budget)
         return reportError("build", budget.status().withContext("--memory-budget"));
     std::optional<std::uint32_t> pageSize; // auto
     if (args.pageSize != "auto") {
-        auto bytes = parseByteSize(args.pageSize);
+        auto bytes = runtime::parseByteSize(args.pageSize);
         if (!bytes)
             return reportError("build", bytes.status().withContext("--page-size"));
         pageSize = static_cast<std::uint32_t>(std::min<std::uint64_t>(*bytes, 0xFFFFFFFFu));
@@ -76,7 +76,7 @@ int runBuild(const BuildArgs& args) {
     options.hierarchy.cubeCost = args.cubeCost;
     options.hierarchy.largeTriangleTolerance = args.largeTriangleTolerance;
     options.hierarchy.maxDepth = args.maxDepth;
-    auto offset = parseDVec3(args.offset);
+    auto offset = runtime::parseDVec3(args.offset);
     if (!offset)
         return reportError("build", offset.status().withContext("--offset"));
     if (!(std::isfinite(args.scale) && args.scale > 0.0))
@@ -133,9 +133,9 @@ int runBuild(const BuildArgs& args) {
                      args.output.c_str(), static_cast<unsigned long long>(report->instancedTriangles),
                      static_cast<unsigned long long>(report->storedTriangles), report->prototypes,
                      static_cast<unsigned long long>(report->instances), static_cast<unsigned long long>(report->nodes),
-                     formatBytes(report->fileBytes).c_str(), formatBytes(report->pageSize).c_str(),
+                     runtime::formatBytes(report->fileBytes).c_str(), runtime::formatBytes(report->pageSize).c_str(),
                      report->pageSizeAuto ? " (auto)" : "", json["total_seconds"].get<double>(),
-                     formatBytes(report->peakRssBytes).c_str());
+                     runtime::formatBytes(report->peakRssBytes).c_str());
         if (report->droppedNonFinite + report->droppedDegenerate > 0)
             std::fprintf(stderr, "dropped %llu triangles with non-finite positions and %llu with zero area\n",
                          static_cast<unsigned long long>(report->droppedNonFinite),

@@ -1,6 +1,6 @@
 #include "Hud.h"
 
-#include "Units.h"
+#include <ff/runtime/Units.h>
 
 #include <ff/runtime/GlProgram.h>
 
@@ -91,7 +91,7 @@ std::string formatHud(const HudInfo& info) {
             "resident %.1f MB  %s budget %s  requests %llu\n",
             static_cast<double>(info.residentBytes) / 1e6,
             info.budgetName,
-            formatBytes(info.budgetBytes).c_str(),
+            runtime::formatBytes(info.budgetBytes).c_str(),
             static_cast<unsigned long long>(info.requestsInFlight));
     text += line;
     text += "[ ] eps  M method  - = budget  Tab orbit/fly  R reset  P shot  H hud  Esc quit";

@@ -1,4 +1,4 @@
-#include "CameraOptions.h"
+#include "CameraFlags.h"
 #include "Commands.h"
 #include "OutputFile.h"
 
@@ -26,7 +26,7 @@ struct PathArgs {
 
 /** One keyframe per stored glTF camera, 1 s apart, smoothly interpolated. */
 Result<runtime::CameraPath> gltfCameraPath(const storage::SceneFile& scene, const PathArgs& args) {
-    FF_ASSIGN_OR_RETURN(const std::vector<StoredCamera> cameras, storedCameras(scene));
+    FF_ASSIGN_OR_RETURN(const std::vector<runtime::StoredCamera> cameras, runtime::storedCameras(scene));
     if (cameras.empty())
         return Status(
                 ErrorCode::NotFound,
@@ -34,7 +34,7 @@ Result<runtime::CameraPath> gltfCameraPath(const storage::SceneFile& scene, cons
                 "or from a glTF file without cameras)");
     std::vector<runtime::CameraKeyframe> keyframes;
     for (std::size_t i = 0; i < cameras.size(); ++i) {
-        const StoredCamera& c = cameras[i];
+        const runtime::StoredCamera& c = cameras[i];
         if (!c.perspective)
             std::fprintf(
                     stderr,
@@ -76,7 +76,7 @@ int runPath(const PathArgs& args) {
     auto scene = storage::SceneFile::open(args.scene);
     if (!scene)
         return reportError("path", scene.status().withContext(args.scene));
-    const runtime::Bounds bounds = sceneBounds(**scene);
+    const runtime::Bounds bounds = runtime::sceneBounds(**scene);
 
     Result<runtime::CameraPath> path = Status(ErrorCode::Internal, "no path made");
     if (args.kind == "orbit")
@@ -91,7 +91,7 @@ int runPath(const PathArgs& args) {
         return reportError("path", path.status().withContext(args.kind));
     // Generators fit the path to the bounds in the file's frame; files hold world coordinates.
     if (args.kind != "gltf")
-        path = path->translated(sceneOrigin(**scene));
+        path = path->translated(runtime::sceneOrigin(**scene));
 
     if (const Status written = output->commitText(path->toJson()); !written)
         return reportError("path", written);

@@ -1,8 +1,8 @@
-#include "CameraOptions.h"
+#include "CameraFlags.h"
 #include "Commands.h"
 #include "FrameFlags.h"
 #include "OutputFile.h"
-#include "Units.h"
+#include <ff/runtime/Units.h>
 
 #include <ff/runtime/OffscreenContext.h>
 #include <ff/runtime/StreamingSession.h>
@@ -33,11 +33,11 @@ struct RenderArgs {
     std::string background = "0.70,0.75,0.83";
     std::string gpuBudget = "512MiB";
     bool coverage = false;
-    CameraOptions camera;
+    runtime::CameraOptions camera;
 };
 
 int runRender(const RenderArgs& args) {
-    auto size = parseImageSize(args.size);
+    auto size = runtime::parseImageSize(args.size);
     if (!size)
         return reportError("render", size.status().withContext("--size"));
     const std::optional<runtime::Method> method = runtime::parseMethod(args.method);
@@ -47,10 +47,10 @@ int runRender(const RenderArgs& args) {
         return reportError("render", Status(ErrorCode::InvalidArgument, "--epsilon must be >= 0"));
     if (args.supersample < 1 || args.supersample > 16 || args.frames < 1)
         return reportError("render", Status(ErrorCode::InvalidArgument, "--supersample must be 1..16 and --frames >= 1"));
-    auto background = parseVec3(args.background);
+    auto background = runtime::parseVec3(args.background);
     if (!background)
         return reportError("render", background.status().withContext("--background"));
-    auto gpuBudget = parseByteSize(args.gpuBudget);
+    auto gpuBudget = runtime::parseByteSize(args.gpuBudget);
     if (!gpuBudget)
         return reportError("render", gpuBudget.status().withContext("--gpu-budget"));
 
@@ -139,7 +139,7 @@ CommandRunner addRenderCommand(CLI::App& app) {
     addBackgroundOption(*cmd, args->background);
     addGpuBudgetOption(*cmd, args->gpuBudget);
     cmd->add_flag("--coverage-alpha", args->coverage, "Keep coverage as the image's alpha channel");
-    args->camera.addTo(*cmd);
+    addCameraOptions(*cmd, args->camera);
     return [args]() { return runRender(*args); };
 }
 

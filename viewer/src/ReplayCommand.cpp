@@ -2,13 +2,13 @@
 // page cache under a fixed budget and reports, per frame and in summary, what the cache did
 // and what the viewer saw (frame time, debt, image error against everything resident).
 
-#include "CameraOptions.h"
+#include "CameraFlags.h"
 #include "Commands.h"
 #include "FrameFlags.h"
 #include "ImageOutput.h"
 #include "OutputFile.h"
-#include "Percentile.h"
-#include "Units.h"
+#include <ff/runtime/Percentile.h>
+#include <ff/runtime/Units.h>
 
 #include <ff/runtime/CameraPath.h>
 #include <ff/runtime/FrameTelemetry.h>
@@ -64,16 +64,16 @@ std::string joinCsv(const std::vector<std::string>& cells) {
 }
 
 int runReplay(const ReplayArgs& args) {
-    auto size = parseImageSize(args.size);
+    auto size = runtime::parseImageSize(args.size);
     if (!size)
         return reportError("replay", size.status().withContext("--size"));
-    auto gpuBudget = parseByteSize(args.gpuBudget);
+    auto gpuBudget = runtime::parseByteSize(args.gpuBudget);
     if (!gpuBudget)
         return reportError("replay", gpuBudget.status().withContext("--gpu-budget"));
     if (args.cacheMb == 0 || args.uploadsPerFrame == 0 || args.ioThreads == 0)
         return reportError("replay", Status(ErrorCode::InvalidArgument, "--cache-mb, --uploads-per-frame and --io-threads must be positive"));
 
-    auto path = readCameraPath(args.path);
+    auto path = runtime::readCameraPath(args.path);
     if (!path)
         return reportError("replay", path.status());
     // Outputs first: an unwritable path fails before the replay, not after it.
@@ -124,8 +124,8 @@ int runReplay(const ReplayArgs& args) {
     frameContext.selection.maxCubeAnisotropy = args.cubeAnisotropy;
     frameContext.budgets.pageInstallsPerFrame = args.uploadsPerFrame;
     frameContext.budgets.gpuUploadsPerFrame = args.sync ? 0 : args.gpuUploadsPerFrame;
-    const runtime::Bounds bounds = sceneBounds(scene);
-    const glm::dvec3 origin = sceneOrigin(scene);
+    const runtime::Bounds bounds = runtime::sceneBounds(scene);
+    const glm::dvec3 origin = runtime::sceneOrigin(scene);
     const std::int64_t frames = path->frameCount();
     std::string perFrameJson = "[";
     std::ofstream csv;
@@ -229,9 +229,9 @@ int runReplay(const ReplayArgs& args) {
             {"path", args.path},
             {"mode", args.sync ? "sync" : "async"},
             {"frames", frames},
-            {"p50_ms", percentile(frameMs, 0.50)},
-            {"p95_ms", percentile(frameMs, 0.95)},
-            {"p99_ms", percentile(frameMs, 0.99)},
+            {"p50_ms", runtime::percentile(frameMs, 0.50)},
+            {"p95_ms", runtime::percentile(frameMs, 0.95)},
+            {"p99_ms", runtime::percentile(frameMs, 0.99)},
             {"bytes_read", total.bytesRead},
             {"unique_bytes", uniqueBytes},
             {"over_fetch", uniqueBytes ? static_cast<double>(total.bytesRead) / static_cast<double>(uniqueBytes) : 0.0},

@@ -1,6 +1,6 @@
 #include "SceneStats.h"
 
-#include "CameraOptions.h"
+#include "CameraFlags.h"
 
 #include <ff/builder/Generators.h>
 #include <ff/builder/SceneSink.h>
@@ -306,7 +306,7 @@ Result<SceneStats> collectSceneStats(const storage::SceneFile& scene) {
 
 Status measureCubeUsage(
         const storage::SceneFile& scene, const CubeUsageOptions& options, SceneStats& stats) {
-    const runtime::Bounds bounds = sceneBounds(scene);
+    const runtime::Bounds bounds = runtime::sceneBounds(scene);
     runtime::MappedPageAccess pages(scene);
     runtime::BackToFrontTraversal traversal(scene, pages);
     CubeRecorder recorder;

@@ -2,7 +2,7 @@
 #include "FrameFlags.h"
 #include "OutputFile.h"
 #include "SceneStats.h"
-#include "Units.h"
+#include <ff/runtime/Units.h>
 
 #include <ff/storage/SceneFile.h>
 
@@ -62,16 +62,16 @@ void printText(const SceneStats& s) {
     std::printf(
             "%s: %s in %llu pages of %s",
             s.path.c_str(),
-            formatBytes(s.fileBytes).c_str(),
+            runtime::formatBytes(s.fileBytes).c_str(),
             static_cast<unsigned long long>(s.pageCount),
-            formatBytes(s.pageSize).c_str());
+            runtime::formatBytes(s.pageSize).c_str());
     if (s.input)
         std::printf(
                 ", %.3gx the input (%s: %s)",
                 static_cast<double>(s.fileBytes) /
                         static_cast<double>(std::max<std::uint64_t>(s.input->bytes, 1)),
                 s.input->what.c_str(),
-                formatBytes(s.input->bytes).c_str());
+                runtime::formatBytes(s.input->bytes).c_str());
     std::printf("\n");
     std::printf(
             "nodes      %llu (%llu instance level, %llu in prototypes): %llu instance, %llu inner "
@@ -142,7 +142,7 @@ void printText(const SceneStats& s) {
                 c.height,
                 static_cast<double>(c.epsilonPixels),
                 static_cast<unsigned long long>(c.neverDrawn),
-                formatBytes(c.neverDrawnBytes).c_str(),
+                runtime::formatBytes(c.neverDrawnBytes).c_str(),
                 static_cast<unsigned long long>(c.neverDrawnInstance),
                 static_cast<unsigned long long>(c.neverDrawnInner),
                 static_cast<unsigned long long>(c.neverDrawnLeaf));
@@ -164,7 +164,7 @@ int runStats(const StatsArgs& args) {
         return reportError("stats", input.status().withContext("--input"));
     stats->input = *input;
     if (args.paths) {
-        auto size = parseImageSize(args.size);
+        auto size = runtime::parseImageSize(args.size);
         if (!size)
             return reportError("stats", size.status().withContext("--size"));
         CubeUsageOptions options;

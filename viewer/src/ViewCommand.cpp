@@ -1,10 +1,10 @@
 #include "CameraController.h"
-#include "CameraOptions.h"
+#include "CameraFlags.h"
 #include "Commands.h"
 #include "FrameFlags.h"
 #include "Hud.h"
 #include "OutputFile.h"
-#include "Units.h"
+#include <ff/runtime/Units.h>
 #include "ViewerControls.h"
 #include "Window.h"
 
@@ -45,7 +45,7 @@ struct ViewArgs {
     std::string script;
     bool noHud = false;
     bool noVsync = false;
-    CameraOptions camera;
+    runtime::CameraOptions camera;
 };
 
 /** Camera motion applied before every frame after the first (--script). */
@@ -94,7 +94,7 @@ Result<ScriptStep> parseScript(std::string_view text) {
 glm::vec3 initialPivot(
         const runtime::Camera& camera, const runtime::Bounds& bounds, const glm::dvec3& origin, const ViewArgs& args) {
     if (!args.camera.target.empty() && args.camera.camera.empty()) {
-        if (auto target = parseDVec3(args.camera.target))
+        if (auto target = runtime::parseDVec3(args.camera.target))
             return glm::vec3(*target - origin);
     }
     const float depth = glm::dot(bounds.center() - camera.eye, camera.forward);
@@ -116,7 +116,7 @@ std::filesystem::path nextScreenshotPath(const std::filesystem::path& dir) {
 
 int runView(const ViewArgs& args) {
     // ---- Arguments --------------------------------------------------------------------------
-    auto size = parseImageSize(args.size);
+    auto size = runtime::parseImageSize(args.size);
     if (!size)
         return reportError("view", size.status().withContext("--size"));
     const std::optional<runtime::Method> method = runtime::parseMethod(args.method);
@@ -128,10 +128,10 @@ int runView(const ViewArgs& args) {
         return reportError("view", Status(ErrorCode::InvalidArgument, "--epsilon must be >= 0"));
     if (args.frames < 0)
         return reportError("view", Status(ErrorCode::InvalidArgument, "--frames must be >= 0"));
-    auto background = parseVec3(args.background);
+    auto background = runtime::parseVec3(args.background);
     if (!background)
         return reportError("view", background.status().withContext("--background"));
-    auto gpuBudget = parseByteSize(args.gpuBudget);
+    auto gpuBudget = runtime::parseByteSize(args.gpuBudget);
     if (!gpuBudget)
         return reportError("view", gpuBudget.status().withContext("--gpu-budget"));
     auto script = parseScript(args.script);
@@ -161,8 +161,8 @@ int runView(const ViewArgs& args) {
     auto initialCamera = args.camera.resolve(**scene);
     if (!initialCamera)
         return reportError("view", initialCamera.status());
-    const runtime::Bounds bounds = sceneBounds(**scene);
-    const glm::dvec3 origin = sceneOrigin(**scene);
+    const runtime::Bounds bounds = runtime::sceneBounds(**scene);
+    const glm::dvec3 origin = runtime::sceneOrigin(**scene);
     scene->reset(); // the session opens its own
 
     // ---- Window, HUD, renderer (destroyed in reverse order, while the context lives) -------
@@ -376,7 +376,7 @@ CommandRunner addViewCommand(CLI::App& app) {
     cmd->add_flag("--no-hud", args->noHud, "Start with the HUD hidden (H toggles it)");
     cmd->add_flag(
             "--no-vsync", args->noVsync, "Do not wait for the display's refresh between frames");
-    args->camera.addTo(*cmd);
+    addCameraOptions(*cmd, args->camera);
     return [args]() { return runView(*args); };
 }
 

@@ -6,7 +6,7 @@
 #include <optional>
 #include <set>
 
-namespace ff::viewer::bench {
+namespace ff::bench {
 
 SceneSpec readSceneSpec(ScenarioReader& reader) {
     SceneSpec spec;
@@ -182,4 +182,4 @@ int readReferenceSupersample(ScenarioReader& reader, int fallback) {
     return static_cast<int>(supersample);
 }
 
-} // namespace ff::viewer::bench
+} // namespace ff::bench

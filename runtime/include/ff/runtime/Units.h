@@ -8,7 +8,7 @@
 #include <string>
 #include <string_view>
 
-namespace ff::viewer {
+namespace ff::runtime {
 
 /** "1GiB", "512MiB", "64KiB", "1G", "1000000" (bytes) -> bytes. */
 [[nodiscard]] Result<std::uint64_t> parseByteSize(std::string_view text);
@@ -21,4 +21,4 @@ namespace ff::viewer {
 /** 1536 -> "1.5 KiB". */
 std::string formatBytes(std::uint64_t bytes);
 
-} // namespace ff::viewer
+} // namespace ff::runtime

@@ -3,7 +3,7 @@
 // faces per level, triangles drawn; plus accuracy against a 4x4 supersampled reference.
 
 #include "BenchSupport.h"
-#include "Benchmarks.h"
+#include <ff/bench/Benchmarks.h>
 #include "ScenarioParts.h"
 
 #include <ff/runtime/ImageMetrics.h>
@@ -14,7 +14,7 @@
 #include <string>
 #include <vector>
 
-namespace ff::viewer::bench {
+namespace ff::bench {
 
 namespace {
 
@@ -127,4 +127,4 @@ Result<BenchRun> prepareTable2(const Scenario& scenario) {
     return BenchRun([p, scenario](const BenchOptions& options) { return runTable2(p, scenario, options); });
 }
 
-} // namespace ff::viewer::bench
+} // namespace ff::bench

@@ -1,10 +1,10 @@
-#include "Percentile.h"
+#include <ff/runtime/Percentile.h>
 
 #include <algorithm>
 #include <cmath>
 #include <cstddef>
 
-namespace ff::viewer {
+namespace ff::runtime {
 
 double percentile(std::vector<double> values, double p) {
     if (values.empty())
@@ -16,4 +16,4 @@ double percentile(std::vector<double> values, double p) {
     return values[std::min(rank == 0 ? 0 : rank - 1, values.size() - 1)];
 }
 
-} // namespace ff::viewer
+} // namespace ff::runtime

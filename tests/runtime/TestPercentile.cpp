@@ -1,11 +1,11 @@
 // The one percentile behind every p50/p95/p99 (replay, benchmarks): nearest rank. The copy in
 // replay once read p = 0 as the maximum (an index of -1 wrapped around).
 
-#include "Percentile.h"
+#include <ff/runtime/Percentile.h>
 
 #include <gtest/gtest.h>
 
-namespace ff::viewer {
+namespace ff::runtime {
 namespace {
 
 TEST(PercentileTest, IsTheNearestRankFromTheMinimumToTheMaximum) {
@@ -21,4 +21,4 @@ TEST(PercentileTest, IsTheNearestRankFromTheMinimumToTheMaximum) {
 }
 
 } // namespace
-} // namespace ff::viewer
+} // namespace ff::runtime

@@ -2,7 +2,7 @@
 
 #include <vector>
 
-namespace ff::viewer {
+namespace ff::runtime {
 
 /**
  * The nearest-rank percentile of `values` (p in [0, 1]): the smallest value with at least p of
@@ -11,4 +11,4 @@ namespace ff::viewer {
  */
 double percentile(std::vector<double> values, double p);
 
-} // namespace ff::viewer
+} // namespace ff::runtime

@@ -2,8 +2,8 @@
 // `farfield build` so its peak RSS (ru_maxrss) is its own.
 
 #include "BenchSupport.h"
-#include "Benchmarks.h"
-#include "Units.h"
+#include <ff/bench/Benchmarks.h>
+#include <ff/runtime/Units.h>
 
 #include <nlohmann/json.hpp>
 
@@ -14,7 +14,7 @@
 #include <thread>
 #include <unistd.h>
 
-namespace ff::viewer::bench {
+namespace ff::bench {
 
 namespace {
 
@@ -84,7 +84,7 @@ Result<BenchRun> prepareBuild(const Scenario& scenario) {
             const std::string budget = step.string("budget", "1GiB");
             if (triangles < 1)
                 step.fail("triangles", "must be a whole number >= 1");
-            if (!parseByteSize(budget))
+            if (!runtime::parseByteSize(budget))
                 step.fail("budget", "\"" + budget + "\" is not a byte size like 256MiB or 1GiB");
             p.ladder.push_back({triangles, budget});
         }
@@ -95,4 +95,4 @@ Result<BenchRun> prepareBuild(const Scenario& scenario) {
     return BenchRun([p, scenario](const BenchOptions& options) { return runBuild(p, scenario, options); });
 }
 
-} // namespace ff::viewer::bench
+} // namespace ff::bench

@@ -1,4 +1,4 @@
-#include "Scenario.h"
+#include <ff/bench/Scenario.h>
 
 #include <algorithm>
 #include <cctype>
@@ -7,7 +7,7 @@
 #include <fstream>
 #include <sstream>
 
-namespace ff::viewer::bench {
+namespace ff::bench {
 
 namespace {
 
@@ -412,4 +412,4 @@ ScenarioReader readScenario(const Scenario& scenario) {
     return reader;
 }
 
-} // namespace ff::viewer::bench
+} // namespace ff::bench

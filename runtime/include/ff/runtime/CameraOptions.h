@@ -5,16 +5,15 @@
 #include <ff/storage/SceneFile.h>
 #include <ff/storage/Status.h>
 
-#include <CLI/CLI.hpp>
-
 #include <cstdint>
 #include <optional>
 #include <string>
 #include <vector>
 
-namespace ff::viewer {
+namespace ff::runtime {
 
-/** Camera flags shared by render, bench and (later) view/replay. */
+/** How a user names a view (render and view flags, bench scenarios): a stored glTF camera, an
+ *  eye and target, an orbit about the scene, or a frame of a camera path. */
 struct CameraOptions {
     std::string camera;  ///< "gltf:N": the N-th camera of the source glTF
     std::string eye;     ///< "x,y,z"
@@ -27,13 +26,12 @@ struct CameraOptions {
     std::string path;        ///< camera path JSON (docs/camera-paths.md)
     std::int64_t pathFrame = -1; ///< frame of `path`; -1 = not given (frame 0)
 
-    void addTo(CLI::App& app);
     /** Resolves the flags against the scene (bounds, stored glTF cameras, camera path). */
-    [[nodiscard]] Result<runtime::Camera> resolve(const storage::SceneFile& scene) const;
+    [[nodiscard]] Result<Camera> resolve(const storage::SceneFile& scene) const;
 };
 
 /** Bounds of a scene file, in its own frame (where the runtime draws). */
-runtime::Bounds sceneBounds(const storage::SceneFile& scene);
+Bounds sceneBounds(const storage::SceneFile& scene);
 
 /** World position of the scene file frame's origin (storage/FORMAT.md "The file frame"): world
  *  coordinates the user gives (--eye, camera paths, glTF cameras) minus this are file frame. */
@@ -55,6 +53,6 @@ struct StoredCamera {
 [[nodiscard]] Result<std::vector<StoredCamera>> storedCameras(const storage::SceneFile& scene);
 
 /** Reads and validates a camera path file; errors name the file. */
-[[nodiscard]] Result<runtime::CameraPath> readCameraPath(const std::string& file);
+[[nodiscard]] Result<CameraPath> readCameraPath(const std::string& file);
 
-} // namespace ff::viewer
+} // namespace ff::runtime

@@ -1,6 +1,6 @@
-#include "CameraOptions.h"
+#include <ff/runtime/CameraOptions.h>
 
-#include "Units.h"
+#include <ff/runtime/Units.h>
 
 #include <nlohmann/json.hpp>
 
@@ -9,20 +9,7 @@
 #include <fstream>
 #include <sstream>
 
-namespace ff::viewer {
-
-void CameraOptions::addTo(CLI::App& app) {
-    app.add_option("--camera", camera, "Camera stored from the source glTF, e.g. gltf:0");
-    app.add_option("--eye", eye, "Camera position x,y,z (with --target)");
-    app.add_option("--target", target, "Point looked at x,y,z (with --eye)");
-    app.add_option("--up", up, "Up direction x,y,z")->capture_default_str();
-    app.add_option("--fov", fovDegrees, "Vertical field of view, degrees")->capture_default_str();
-    app.add_option("--distance", distance, "Orbit camera: distance from the centre in scene radii")->capture_default_str();
-    app.add_option("--azimuth", azimuth, "Orbit camera: degrees about +Y, from +Z")->capture_default_str();
-    app.add_option("--elevation", elevation, "Orbit camera: degrees above the horizon")->capture_default_str();
-    app.add_option("--path", path, "Camera path JSON (farfield path ...); its frame --path-frame");
-    app.add_option("--path-frame", pathFrame, "Frame of --path to use, from 0 (default 0)");
-}
+namespace ff::runtime {
 
 Result<std::vector<StoredCamera>> storedCameras(const storage::SceneFile& scene) {
     const nlohmann::json metadata = nlohmann::json::parse(scene.metadataJson(), nullptr, false);
@@ -56,7 +43,7 @@ Result<std::vector<StoredCamera>> storedCameras(const storage::SceneFile& scene)
     return result;
 }
 
-Result<runtime::CameraPath> readCameraPath(const std::string& file) {
+Result<CameraPath> readCameraPath(const std::string& file) {
     std::ifstream in(file, std::ios::binary);
     if (!in)
         return Status(ErrorCode::NotFound, file + ": cannot open the camera path");
@@ -64,13 +51,13 @@ Result<runtime::CameraPath> readCameraPath(const std::string& file) {
     text << in.rdbuf();
     if (in.bad())
         return Status(ErrorCode::IoError, file + ": cannot read the camera path");
-    auto path = runtime::CameraPath::fromJson(text.str());
+    auto path = CameraPath::fromJson(text.str());
     if (!path)
         return path.status().withContext(file);
     return path;
 }
 
-runtime::Bounds sceneBounds(const storage::SceneFile& scene) {
+Bounds sceneBounds(const storage::SceneFile& scene) {
     const auto& h = scene.header();
     return {{h.boundsMin[0], h.boundsMin[1], h.boundsMin[2]}, {h.boundsMax[0], h.boundsMax[1], h.boundsMax[2]}};
 }
@@ -80,8 +67,8 @@ glm::dvec3 sceneOrigin(const storage::SceneFile& scene) {
     return {o[0], o[1], o[2]};
 }
 
-Result<runtime::Camera> CameraOptions::resolve(const storage::SceneFile& scene) const {
-    const runtime::Bounds bounds = sceneBounds(scene);
+Result<Camera> CameraOptions::resolve(const storage::SceneFile& scene) const {
+    const Bounds bounds = sceneBounds(scene);
     const glm::dvec3 origin = sceneOrigin(scene);
     if (!(fovDegrees > 0.0f && fovDegrees < 179.0f))
         return Status(ErrorCode::InvalidArgument, "--fov must be between 0 and 179 degrees");
@@ -89,13 +76,13 @@ Result<runtime::Camera> CameraOptions::resolve(const storage::SceneFile& scene) 
     if (!path.empty()) {
         if (!camera.empty() || !eye.empty() || !target.empty())
             return Status(ErrorCode::InvalidArgument, "--path does not go with --camera, --eye or --target");
-        FF_ASSIGN_OR_RETURN(const runtime::CameraPath cameraPath, readCameraPath(path));
+        FF_ASSIGN_OR_RETURN(const CameraPath cameraPath, readCameraPath(path));
         const std::int64_t frame = std::max<std::int64_t>(pathFrame, 0);
         if (frame >= cameraPath.frameCount())
             return Status(ErrorCode::InvalidArgument, "--path-frame " + std::to_string(frame) + ": " + path + " has " +
                                                               std::to_string(cameraPath.frameCount()) + " frames (0 to " +
                                                               std::to_string(cameraPath.frameCount() - 1) + ")");
-        runtime::Camera result = cameraPath.sample(cameraPath.frameTime(frame), origin);
+        Camera result = cameraPath.sample(cameraPath.frameTime(frame), origin);
         result.fitClipPlanes(bounds);
         return result;
     }
@@ -115,7 +102,7 @@ Result<runtime::Camera> CameraOptions::resolve(const storage::SceneFile& scene) 
                                                        std::to_string(cameras.size()) + " glTF camera(s)");
         const StoredCamera& c = cameras[static_cast<std::size_t>(index)];
         const glm::vec3 eyeInFile(c.eye - origin);
-        runtime::Camera result = runtime::Camera::lookAt(eyeInFile, eyeInFile + c.forward, c.up, c.yfovRadians.value_or(fov));
+        Camera result = Camera::lookAt(eyeInFile, eyeInFile + c.forward, c.up, c.yfovRadians.value_or(fov));
         result.orthographic = !c.perspective;
         result.orthoHalfHeight = c.ymag;
         result.fitClipPlanes(bounds);
@@ -131,13 +118,13 @@ Result<runtime::Camera> CameraOptions::resolve(const storage::SceneFile& scene) 
         const glm::vec3 t(worldTarget - origin);
         if (e == t)
             return Status(ErrorCode::InvalidArgument, "--eye and --target must differ");
-        runtime::Camera result = runtime::Camera::lookAt(e, t, u, fov);
+        Camera result = Camera::lookAt(e, t, u, fov);
         result.fitClipPlanes(bounds);
         return result;
     }
     if (!(distance > 0.0f) || !std::isfinite(azimuth) || !std::isfinite(elevation))
         return Status(ErrorCode::InvalidArgument, "--distance must be positive");
-    return runtime::Camera::orbit(bounds, distance, azimuth, elevation, fov);
+    return Camera::orbit(bounds, distance, azimuth, elevation, fov);
 }
 
-} // namespace ff::viewer
+} // namespace ff::runtime

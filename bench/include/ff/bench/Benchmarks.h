@@ -4,7 +4,7 @@
 // up front (prepare*: errors name the file and the key, nothing has run yet) and returns how to
 // run it; `farfield bench` prepares every scenario it was given before running the first.
 
-#include "Scenario.h"
+#include <ff/bench/Scenario.h>
 
 #include <ff/storage/Status.h>
 
@@ -12,7 +12,7 @@
 #include <functional>
 #include <string>
 
-namespace ff::viewer::bench {
+namespace ff::bench {
 
 struct BenchOptions {
     std::filesystem::path outDir = "docs/results";
@@ -50,4 +50,4 @@ std::filesystem::path workFolder(const BenchOptions& options);
 /** Removes the work folder if it was the default one. */
 void removeWorkFolder(const BenchOptions& options);
 
-} // namespace ff::viewer::bench
+} // namespace ff::bench

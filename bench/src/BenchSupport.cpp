@@ -1,6 +1,6 @@
 #include "BenchSupport.h"
 
-#include "Benchmarks.h"
+#include <ff/bench/Benchmarks.h>
 
 #include <ff/builder/Generators.h>
 #include <ff/builder/SceneBuilder.h>
@@ -14,7 +14,7 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
-namespace ff::viewer::bench {
+namespace ff::bench {
 
 std::filesystem::path workFolder(const BenchOptions& options) {
     const std::filesystem::path work = options.workDir.empty() ? options.outDir / "scenes" : options.workDir;
@@ -202,4 +202,4 @@ Result<nlohmann::json> readJsonObject(const std::filesystem::path& path, const c
     return json;
 }
 
-} // namespace ff::viewer::bench
+} // namespace ff::bench

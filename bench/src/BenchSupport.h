@@ -12,7 +12,7 @@
 #include <string>
 #include <vector>
 
-namespace ff::viewer::bench {
+namespace ff::bench {
 
 /** A CSV table built row by row; cells are written as given. */
 class CsvTable {
@@ -78,4 +78,4 @@ struct ChildRun {
  *  interpreter is an error naming what is missing. */
 [[nodiscard]] Status plotCharts(const std::string& kind, const std::filesystem::path& csv, const std::filesystem::path& outDir);
 
-} // namespace ff::viewer::bench
+} // namespace ff::bench

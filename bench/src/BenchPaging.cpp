@@ -4,14 +4,14 @@
 // each replay's memory is its own.
 
 #include "BenchSupport.h"
-#include "Benchmarks.h"
+#include <ff/bench/Benchmarks.h>
 #include "ScenarioParts.h"
 
 #include <nlohmann/json.hpp>
 
 #include <cstdio>
 
-namespace ff::viewer::bench {
+namespace ff::bench {
 
 namespace {
 
@@ -149,4 +149,4 @@ Result<BenchRun> preparePaging(const Scenario& scenario) {
     return BenchRun([p, scenario](const BenchOptions& options) { return runPaging(p, scenario, options); });
 }
 
-} // namespace ff::viewer::bench
+} // namespace ff::bench

@@ -2,7 +2,7 @@
 // trees, rendered from one fixed viewpoint; frame time against scene size on log-log axes.
 
 #include "BenchSupport.h"
-#include "Benchmarks.h"
+#include <ff/bench/Benchmarks.h>
 
 #include <ff/runtime/OffscreenContext.h>
 
@@ -11,7 +11,7 @@
 #include <string>
 #include <vector>
 
-namespace ff::viewer::bench {
+namespace ff::bench {
 
 namespace {
 
@@ -122,4 +122,4 @@ Result<BenchRun> prepareForest(const Scenario& scenario) {
     return BenchRun([p, scenario](const BenchOptions& options) { return runForest(p, scenario, options); });
 }
 
-} // namespace ff::viewer::bench
+} // namespace ff::bench

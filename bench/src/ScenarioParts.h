@@ -4,7 +4,7 @@
 // methods compared, the full reference. Keys and meanings: bench/README.md.
 
 #include "BenchSupport.h"
-#include "Scenario.h"
+#include <ff/bench/Scenario.h>
 
 #include <ff/runtime/CameraPathGenerators.h>
 #include <ff/runtime/Selection.h>
@@ -16,7 +16,7 @@
 #include <string>
 #include <vector>
 
-namespace ff::viewer::bench {
+namespace ff::bench {
 
 /** "scene" ({"gltf": FILE} or {"generate": SPEC}) and "build" (extra `farfield build` flags),
  *  with ${shared} expanded. */
@@ -91,4 +91,4 @@ std::string sweepValueText(const nlohmann::json& value);
 /** "reference": {"supersample": N}, N in 1..16; the reference is always method full. */
 int readReferenceSupersample(ScenarioReader& reader, int fallback);
 
-} // namespace ff::viewer::bench
+} // namespace ff::bench

@@ -5,9 +5,9 @@
 // frame-to-frame change beyond the reference's). Keys: bench/README.md.
 
 #include "BenchSupport.h"
-#include "Benchmarks.h"
-#include "CameraOptions.h"
-#include "Percentile.h"
+#include <ff/bench/Benchmarks.h>
+#include <ff/runtime/CameraOptions.h>
+#include <ff/runtime/Percentile.h>
 #include "ScenarioParts.h"
 
 #include <ff/runtime/CameraPathGenerators.h>
@@ -25,7 +25,7 @@
 #include <string>
 #include <vector>
 
-namespace ff::viewer::bench {
+namespace ff::bench {
 
 namespace {
 
@@ -65,7 +65,7 @@ Status runPath(const PathParams& p, const Scenario& scenario, const BenchOptions
     FF_ASSIGN_OR_RETURN(auto context, runtime::OffscreenContext::create());
     // The reference of every frame: all geometry, every page mapped.
     FF_ASSIGN_OR_RETURN(auto referenceSession, runtime::StreamingSession::open(scenePath));
-    const runtime::Bounds bounds = sceneBounds(referenceSession->scene());
+    const runtime::Bounds bounds = runtime::sceneBounds(referenceSession->scene());
     auto path = makePath(p.path, bounds);
     if (!path)
         return path.status().withContext(scenario.where() + ": path");
@@ -173,12 +173,12 @@ Status runPath(const PathParams& p, const Scenario& scenario, const BenchOptions
                  formatNumber(method.selection.maxCubeAnisotropy),
                  std::to_string(frames),
                  formatNumber(total.mean, 6),
-                 formatNumber(percentile(instability, 0.95), 6),
+                 formatNumber(runtime::percentile(instability, 0.95), 6),
                  formatNumber(total.maxFrame, 6),
-                 formatNumber(percentile(psnr, 0.5), 3), // a median: identical frames score inf
+                 formatNumber(runtime::percentile(psnr, 0.5), 3), // a median: identical frames score inf
                  formatNumber(*std::min_element(psnr.begin(), psnr.end()), 3),
-                 formatNumber(percentile(frameMs, 0.50), 3),
-                 formatNumber(percentile(frameMs, 0.99), 3),
+                 formatNumber(runtime::percentile(frameMs, 0.50), 3),
+                 formatNumber(runtime::percentile(frameMs, 0.99), 3),
                  std::to_string(debtFrames),
                  std::to_string(session->totals().bytesRead)});
     }
@@ -232,4 +232,4 @@ Result<BenchRun> preparePath(const Scenario& scenario) {
             [p, scenario](const BenchOptions& options) { return runPath(p, scenario, options); });
 }
 
-} // namespace ff::viewer::bench
+} // namespace ff::bench

@@ -21,7 +21,7 @@
 #include <string>
 #include <vector>
 
-namespace ff::viewer::bench {
+namespace ff::bench {
 
 /** One scenario file, read, with its "quick" overrides applied or not. */
 struct Scenario {
@@ -139,4 +139,4 @@ private:
  *  scenario must outlive it. */
 ScenarioReader readScenario(const Scenario& scenario);
 
-} // namespace ff::viewer::bench
+} // namespace ff::bench

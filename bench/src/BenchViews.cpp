@@ -4,8 +4,8 @@
 // holes and over-coverage. Keys: bench/README.md.
 
 #include "BenchSupport.h"
-#include "Benchmarks.h"
-#include "CameraOptions.h"
+#include <ff/bench/Benchmarks.h>
+#include <ff/runtime/CameraOptions.h>
 #include "ScenarioParts.h"
 
 #include <ff/runtime/ImageMetrics.h>
@@ -22,14 +22,14 @@
 #include <string>
 #include <vector>
 
-namespace ff::viewer::bench {
+namespace ff::bench {
 
 namespace {
 
-/** A view: what the same keys mean as `farfield render` flags (CameraOptions). */
+/** A view: what the same keys mean as `farfield render` flags (runtime::CameraOptions). */
 struct ViewSpec {
     std::string label;
-    CameraOptions camera;
+    runtime::CameraOptions camera;
 };
 
 /** "sweep": one parameter over values; a method key or "build:--FLAG". */
@@ -71,7 +71,7 @@ bool isVec3(const nlohmann::json& v) {
 }
 
 /** "camera": {"position", "target", "up", "fov"} or "gltf:N", onto the render flags. */
-void readCamera(ScenarioReader& view, CameraOptions& camera) {
+void readCamera(ScenarioReader& view, runtime::CameraOptions& camera) {
     const nlohmann::json* value = view.raw("camera");
     if (value->is_string()) {
         camera.camera = value->get<std::string>();
@@ -104,7 +104,7 @@ std::vector<ViewSpec> readViews(ScenarioReader& reader) {
     for (ScenarioReader& v : reader.objects("views")) {
         ViewSpec view;
         view.label = v.string("label", "view" + std::to_string(views.size()));
-        CameraOptions& camera = view.camera;
+        runtime::CameraOptions& camera = view.camera;
         camera.fovDegrees = static_cast<float>(v.number("fov", camera.fovDegrees));
         if (v.has("camera")) {
             for (const char* key : {"distance", "azimuth", "elevation"})
@@ -376,4 +376,4 @@ Result<BenchRun> prepareViews(const Scenario& scenario) {
             [p, scenario](const BenchOptions& options) { return runViews(p, scenario, options); });
 }
 
-} // namespace ff::viewer::bench
+} // namespace ff::bench

@@ -6,15 +6,15 @@
 // scene file is removed as soon as the replay is done. Keys: bench/README.md.
 
 #include "BenchSupport.h"
-#include "Benchmarks.h"
+#include <ff/bench/Benchmarks.h>
 #include "ScenarioParts.h"
-#include "Units.h"
+#include <ff/runtime/Units.h>
 
 #include <nlohmann/json.hpp>
 
 #include <cstdio>
 
-namespace ff::viewer::bench {
+namespace ff::bench {
 
 namespace {
 
@@ -33,7 +33,7 @@ std::string joined(const std::vector<std::string>& words) {
 }
 
 std::string bytesCell(const nlohmann::json& object, const char* key) {
-    return formatBytes(object.value(key, std::uint64_t{0}));
+    return runtime::formatBytes(object.value(key, std::uint64_t{0}));
 }
 
 Status runReplay(const ReplayParams& p, const Scenario& scenario, const BenchOptions& options) {
@@ -106,7 +106,7 @@ Status runReplay(const ReplayParams& p, const Scenario& scenario, const BenchOpt
              bytesCell(bytes, "spill"),
              bytesCell(built, "memory_budget_bytes"),
              formatNumber(build.seconds),
-             formatBytes(build.peakRssBytes)});
+             runtime::formatBytes(build.peakRssBytes)});
     CsvTable replayTable(
             {"frames",
              "p50_ms",
@@ -134,7 +134,7 @@ Status runReplay(const ReplayParams& p, const Scenario& scenario, const BenchOpt
              bytesCell(summary, "peak_resident_bytes"),
              bytesCell(summary, "peak_rss_anon_bytes"),
              bytesCell(summary, "peak_rss_file_bytes"),
-             formatBytes(replay.peakRssBytes),
+             runtime::formatBytes(replay.peakRssBytes),
              std::to_string(summary.value("debt_frames", 0)),
              std::to_string(summary.value("stalled_frames", 0)),
              summary.contains("max_frames_to_full_quality") && summary["max_frames_to_full_quality"].is_number()
@@ -177,4 +177,4 @@ Result<BenchRun> prepareReplay(const Scenario& scenario) {
             [p, scenario](const BenchOptions& options) { return runReplay(p, scenario, options); });
 }
 
-} // namespace ff::viewer::bench
+} // namespace ff::bench

@@ -1,4 +1,4 @@
-#include "Units.h"
+#include <ff/runtime/Units.h>
 
 #include <cctype>
 #include <charconv>
@@ -6,7 +6,7 @@
 #include <cstdio>
 #include <string>
 
-namespace ff::viewer {
+namespace ff::runtime {
 
 namespace {
 
@@ -99,4 +99,4 @@ std::string formatBytes(std::uint64_t bytes) {
     return text;
 }
 
-} // namespace ff::viewer
+} // namespace ff::runtime
