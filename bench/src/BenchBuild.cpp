@@ -30,8 +30,8 @@ struct BuildParams {
 };
 
 Status runBuild(const BuildParams& p, const Scenario& scenario, const BenchOptions& options) {
-    std::filesystem::create_directories(options.outDir);
-    const std::filesystem::path work = workFolder(options);
+    ScenarioRun scenarioRun(scenario, options);
+    const std::filesystem::path& work = scenarioRun.work();
     const unsigned cores = std::max(1u, std::thread::hardware_concurrency());
     const std::vector<Step>& ladder = p.ladder;
 
@@ -61,15 +61,11 @@ Status runBuild(const BuildParams& p, const Scenario& scenario, const BenchOptio
     }
     const std::filesystem::path csv = options.outDir / (scenario.name + ".csv");
     FF_RETURN_IF_ERROR(table.write(csv));
-    FF_RETURN_IF_ERROR(plotCharts("build", csv, options.outDir));
-    ReportFile mdFile(options.outDir, scenario.name, scenario.title, scenario.description);
-    std::ostream& md = mdFile.stream();
+    std::ostringstream md;
     md << "`" << options.command << "`: `farfield build --generate terrain:triangles=N` end to end (generate, spill, "
        << "partition, octree, cubes, write, fsync) on " << cores << " cores; peak RSS is the child's ru_maxrss.\n\n"
        << table.markdown() << "\n![throughput and memory](" << scenario.name << ".png)\n";
-    FF_RETURN_IF_ERROR(mdFile.close());
-    removeWorkFolder(options);
-    return Status::ok();
+    return scenarioRun.finish("build", csv, md.str());
 }
 
 } // namespace

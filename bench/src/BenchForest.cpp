@@ -8,6 +8,7 @@
 
 #include <array>
 #include <cstdio>
+#include <sstream>
 #include <string>
 #include <vector>
 
@@ -27,8 +28,8 @@ struct ForestParams {
 };
 
 Status runForest(const ForestParams& p, const Scenario& scenario, const BenchOptions& options) {
-    std::filesystem::create_directories(options.outDir);
-    const std::filesystem::path work = workFolder(options);
+    ScenarioRun scenarioRun(scenario, options);
+    const std::filesystem::path& work = scenarioRun.work();
     FF_ASSIGN_OR_RETURN(auto context, runtime::OffscreenContext::create());
 
     // One viewpoint for every forest, relative to the corner where the forest starts: outside
@@ -86,12 +87,10 @@ Status runForest(const ForestParams& p, const Scenario& scenario, const BenchOpt
     }
     const std::filesystem::path csv = options.outDir / (scenario.name + ".csv");
     FF_RETURN_IF_ERROR(table.write(csv));
-    FF_RETURN_IF_ERROR(plotCharts("forest", csv, options.outDir));
     std::string sizes;
     for (const auto& size : p.sizes)
         sizes += (sizes.empty() ? "" : " and ") + std::to_string(size[0]) + "x" + std::to_string(size[1]);
-    ReportFile mdFile(options.outDir, scenario.name, scenario.title, scenario.description);
-    std::ostream& md = mdFile.stream();
+    std::ostringstream md;
     md << "`" << options.command << "`: forests of " << p.trees.front() << " to " << p.trees.back()
        << " trees (one ~52.6k-triangle prototype plus one "
        << "transform per tree), one viewpoint fixed at the forest's corner looking diagonally into it and over it to the horizon, at "
@@ -100,9 +99,7 @@ Status runForest(const ForestParams& p, const Scenario& scenario, const BenchOpt
        << " M triangles and extrapolated above that from the measured per-triangle cost (full_measured = 0). "
        << "Chamberlain et al. report an 88x speedup at 16,384 trees (859 M polygons).\n\n"
        << table.markdown() << "\n![frame time against scene size](" << scenario.name << ".png)\n";
-    FF_RETURN_IF_ERROR(mdFile.close());
-    removeWorkFolder(options);
-    return Status::ok();
+    return scenarioRun.finish("forest", csv, md.str());
 }
 
 } // namespace

@@ -33,8 +33,8 @@ struct PagingParams {
 };
 
 Status runPaging(const PagingParams& p, const Scenario& scenario, const BenchOptions& options) {
-    std::filesystem::create_directories(options.outDir);
-    const std::filesystem::path work = workFolder(options);
+    ScenarioRun scenarioRun(scenario, options);
+    const std::filesystem::path& work = scenarioRun.work();
     const std::string prefix = scenario.name;
     const std::string& ff = options.selfExe;
     const std::filesystem::path scene = work / "paging.ffs";
@@ -103,11 +103,9 @@ Status runPaging(const PagingParams& p, const Scenario& scenario, const BenchOpt
                                  std::to_string(p.teleportCacheMb), "--csv", frames.string(), "--summary",
                                  teleportSummary.string()})
                                .status());
-    FF_RETURN_IF_ERROR(plotCharts("paging", workingSetCsv, options.outDir));
 
     FF_ASSIGN_OR_RETURN(const nlohmann::json t, readJsonObject(teleportSummary, "replay summary"));
-    ReportFile mdFile(options.outDir, prefix, scenario.title, scenario.description);
-    std::ostream& md = mdFile.stream();
+    std::ostringstream md;
     md << "`" << options.command << "`. **Working set**: the bytes resident for one complete frame (`replay --sync`, "
        << "epsilon = 1, 640x480, the first frame of `farfield path orbit`: the same view in scene radii for every "
        << "size) against scene size.\n\n"
@@ -115,9 +113,7 @@ Status runPaging(const PagingParams& p, const Scenario& scenario, const BenchOpt
        << "**Teleports**: " << teleports << " jumps across `" << terrain << "` with a cold " << p.teleportCacheMb
        << " MiB cache, asynchronous (`" << prefix << "-teleports.csv` per frame, summary below).\n\n```json\n"
        << t.dump(2) << "\n```\n\n![teleport timeline](" << prefix << "-teleports.png)\n";
-    FF_RETURN_IF_ERROR(mdFile.close());
-    removeWorkFolder(options);
-    return Status::ok();
+    return scenarioRun.finish("paging", workingSetCsv, md.str());
 }
 
 } // namespace

@@ -22,6 +22,7 @@
 #include <cstdio>
 #include <memory>
 #include <optional>
+#include <sstream>
 #include <string>
 #include <vector>
 
@@ -56,8 +57,8 @@ Result<std::unique_ptr<runtime::StreamingSession>> openSession(const PathParams&
 }
 
 Status runPath(const PathParams& p, const Scenario& scenario, const BenchOptions& options) {
-    std::filesystem::create_directories(options.outDir);
-    const std::filesystem::path work = workFolder(options);
+    ScenarioRun scenarioRun(scenario, options);
+    const std::filesystem::path& work = scenarioRun.work();
     const std::filesystem::path scenePath = work / (scenario.name + ".ffs");
     std::fprintf(stderr, "%s: building the scene\n", scenario.name.c_str());
     FF_RETURN_IF_ERROR(
@@ -186,9 +187,7 @@ Status runPath(const PathParams& p, const Scenario& scenario, const BenchOptions
     const std::filesystem::path csv = options.outDir / (scenario.name + ".csv");
     FF_RETURN_IF_ERROR(perFrame.write(csv));
     FF_RETURN_IF_ERROR(summary.write(options.outDir / (scenario.name + "-summary.csv")));
-    FF_RETURN_IF_ERROR(plotCharts("path", csv, options.outDir));
-    ReportFile mdFile(options.outDir, scenario.name, scenario.title, scenario.description);
-    std::ostream& md = mdFile.stream();
+    std::ostringstream md;
     md << "Command: `" << options.command << "`\n\n"
        << "Scene: "
        << (p.scene.gltf.empty() ? "`--generate " + p.scene.generate + "`"
@@ -208,9 +207,7 @@ Status runPath(const PathParams& p, const Scenario& scenario, const BenchOptions
        << ".png)\n";
     if (p.cache.cacheMb > 0)
         md << "\n![PSNR against bytes read](" << scenario.name << "-bytes.png)\n";
-    FF_RETURN_IF_ERROR(mdFile.close());
-    removeWorkFolder(options);
-    return Status::ok();
+    return scenarioRun.finish("path", csv, md.str());
 }
 
 } // namespace

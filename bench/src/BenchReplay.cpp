@@ -37,8 +37,8 @@ std::string bytesCell(const nlohmann::json& object, const char* key) {
 }
 
 Status runReplay(const ReplayParams& p, const Scenario& scenario, const BenchOptions& options) {
-    std::filesystem::create_directories(options.outDir);
-    const std::filesystem::path work = workFolder(options);
+    ScenarioRun scenarioRun(scenario, options);
+    const std::filesystem::path& work = scenarioRun.work();
     const std::string& name = scenario.name;
     const std::filesystem::path scene = work / (name + ".ffs");
     const std::filesystem::path report = work / (name + "-build.json");
@@ -96,7 +96,6 @@ Status runReplay(const ReplayParams& p, const Scenario& scenario, const BenchOpt
                      "--summary",
                      summaryPath.string()}));
     FF_ASSIGN_OR_RETURN(const nlohmann::json summary, readJsonObject(summaryPath, "replay summary"));
-    FF_RETURN_IF_ERROR(plotCharts("replay", frames, options.outDir));
 
     const nlohmann::json& bytes = built["bytes"];
     CsvTable buildTable({"triangles", "file", "spill", "memory_budget", "seconds", "peak_rss"});
@@ -142,8 +141,7 @@ Status runReplay(const ReplayParams& p, const Scenario& scenario, const BenchOpt
                      : "never (" + std::to_string(summary.value("never_converged", 0)) + " segments)",
              std::to_string(summary.value("failed_pages", 0))});
 
-    ReportFile mdFile(options.outDir, name, scenario.title, scenario.description);
-    std::ostream& md = mdFile.stream();
+    std::ostringstream md;
     const std::string buildFlags =
             p.scene.buildFlags.empty() ? "" : " " + joined(p.scene.buildFlags);
     md << "`" << options.command << "`: a child `farfield build" << buildFlags
@@ -158,9 +156,7 @@ Status runReplay(const ReplayParams& p, const Scenario& scenario, const BenchOpt
        << replayTable.markdown() << "\n![replay timeline](" << name << ".png)\n";
     std::filesystem::remove(report);
     std::filesystem::remove(path);
-    FF_RETURN_IF_ERROR(mdFile.close());
-    removeWorkFolder(options);
-    return Status::ok();
+    return scenarioRun.finish("replay", frames, md.str());
 }
 
 } // namespace

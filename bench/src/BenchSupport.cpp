@@ -16,16 +16,22 @@
 
 namespace ff::bench {
 
+namespace {
+
+/** The work folder for scene files (options.workDir, else OUT/scenes), created. */
 std::filesystem::path workFolder(const BenchOptions& options) {
     const std::filesystem::path work = options.workDir.empty() ? options.outDir / "scenes" : options.workDir;
     std::filesystem::create_directories(work);
     return work;
 }
 
+/** Removes the work folder if it was the default one. */
 void removeWorkFolder(const BenchOptions& options) {
     if (options.workDir.empty())
         std::filesystem::remove_all(options.outDir / "scenes");
 }
+
+} // namespace
 
 Status CsvTable::write(const std::filesystem::path& path) const {
     std::ofstream out(path);
@@ -178,19 +184,29 @@ Status plotCharts(const std::string& kind, const std::filesystem::path& csv, con
     return Status::ok();
 }
 
-ReportFile::ReportFile(const std::filesystem::path& outDir, const std::string& name, const std::string& title,
-                       const std::string& description)
-    : mPath(outDir / (name + ".md"))
-    , mOut(mPath) {
-    mOut << "# " << title << "\n\n";
-    if (!description.empty())
-        mOut << description << "\n\n";
+ScenarioRun::ScenarioRun(const Scenario& scenario, const BenchOptions& options)
+    : mScenario(scenario)
+    , mOptions(options) {
+    std::filesystem::create_directories(options.outDir);
+    mWork = workFolder(options);
 }
 
-Status ReportFile::close() {
-    mOut.close();
-    if (!mOut)
-        return Status(ErrorCode::IoError, "cannot write " + mPath.string());
+std::filesystem::path ScenarioRun::output(const std::string& suffix) const {
+    return mOptions.outDir / (mScenario.name + suffix);
+}
+
+Status ScenarioRun::finish(const std::string& chartKind, const std::filesystem::path& chartCsv, const std::string& body) {
+    FF_RETURN_IF_ERROR(plotCharts(chartKind, chartCsv, mOptions.outDir));
+    const std::filesystem::path path = output(".md");
+    std::ofstream out(path);
+    out << "# " << mScenario.title << "\n\n";
+    if (!mScenario.description.empty())
+        out << mScenario.description << "\n\n";
+    out << body;
+    out.close();
+    if (!out)
+        return Status(ErrorCode::IoError, "cannot write " + path.string());
+    removeWorkFolder(mOptions);
     return Status::ok();
 }
 

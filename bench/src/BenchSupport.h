@@ -1,5 +1,6 @@
 #pragma once
 
+#include <ff/bench/Benchmarks.h>
 #include <ff/runtime/Camera.h>
 #include <ff/runtime/StreamingSession.h>
 #include <ff/storage/Status.h>
@@ -30,19 +31,27 @@ private:
 
 std::string formatNumber(double value, int decimals = 2);
 
-/** A scenario's Markdown report, OUTDIR/NAME.md: opened with its title (and description, if
- *  any) as the heading; close() says whether everything reached the disk. */
-class ReportFile {
+/**
+ * The skeleton every benchmark kind runs in: read scenario -> run -> CSV -> charts -> report.
+ * Constructing it makes the output folder and the work folder for scene files; the kind then
+ * measures, writes its tables (CsvTable::write to output(...)) and composes the report's body;
+ * finish() draws the charts (scripts/plot_bench.py KIND CSV), writes OUT/NAME.md (the title
+ * and description as its heading, then the body), and removes the work folder if it was the
+ * default one.
+ */
+class ScenarioRun {
 public:
-    ReportFile(const std::filesystem::path& outDir, const std::string& name, const std::string& title,
-               const std::string& description);
-    std::ostream& stream() noexcept { return mOut; }
-    /** IoError naming the file if any write failed. */
-    [[nodiscard]] Status close();
+    ScenarioRun(const Scenario& scenario, const BenchOptions& options);
+    const std::filesystem::path& work() const noexcept { return mWork; }
+    /** OUT/NAME followed by `suffix` (e.g. ".csv", "-summary.csv"). */
+    std::filesystem::path output(const std::string& suffix) const;
+    [[nodiscard]] Status finish(const std::string& chartKind, const std::filesystem::path& chartCsv,
+                                const std::string& body);
 
 private:
-    std::filesystem::path mPath;
-    std::ofstream mOut;
+    const Scenario& mScenario;
+    const BenchOptions& mOptions;
+    std::filesystem::path mWork;
 };
 
 /** A frame at `camera` of width x height with `selection` (default budgets). */

@@ -11,6 +11,7 @@
 
 #include <array>
 #include <cstdio>
+#include <sstream>
 #include <string>
 #include <vector>
 
@@ -30,8 +31,8 @@ struct Table2Params {
 };
 
 Status runTable2(const Table2Params& p, const Scenario& scenario, const BenchOptions& options) {
-    std::filesystem::create_directories(options.outDir);
-    const std::filesystem::path work = workFolder(options);
+    ScenarioRun scenarioRun(scenario, options);
+    const std::filesystem::path& work = scenarioRun.work();
     const std::filesystem::path scene = work / "tree.ffs";
     std::fprintf(stderr, "%s: building %s\n", scenario.name.c_str(), p.generate.c_str());
     FF_RETURN_IF_ERROR(buildGenerated(p.generate, scene));
@@ -88,9 +89,7 @@ Status runTable2(const Table2Params& p, const Scenario& scenario, const BenchOpt
     }
     const std::filesystem::path csv = options.outDir / (scenario.name + ".csv");
     FF_RETURN_IF_ERROR(table.write(csv));
-    FF_RETURN_IF_ERROR(plotCharts("table2", csv, options.outDir));
-    ReportFile mdFile(options.outDir, scenario.name, scenario.title, scenario.description);
-    std::ostream& md = mdFile.stream();
+    std::ostringstream md;
     md << "`" << options.command << "` on " << file->header().storedTriangles << " triangles (the paper's tree: 52,470), "
        << "viewed " << p.azimuth << " degrees about the vertical axis from a sampled direction, at d scene radii, "
        << "epsilon = " << p.eps << " pixel. "
@@ -98,9 +97,7 @@ Status runTable2(const Table2Params& p, const Scenario& scenario, const BenchOpt
        << "llvmpipe; PSNR/SSIM against the same view with all geometry, " << p.supersample << "x" << p.supersample
        << " supersampled.\n\n"
        << table.markdown() << "\n![speed against accuracy](" << scenario.name << ".png)\n";
-    FF_RETURN_IF_ERROR(mdFile.close());
-    removeWorkFolder(options);
-    return Status::ok();
+    return scenarioRun.finish("table2", csv, md.str());
 }
 
 } // namespace

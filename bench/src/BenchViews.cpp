@@ -19,6 +19,7 @@
 #include <limits>
 #include <optional>
 #include <set>
+#include <sstream>
 #include <string>
 #include <vector>
 
@@ -211,8 +212,8 @@ std::string describeScene(const SceneSpec& scene) {
 }
 
 Status runViews(const ViewsParams& p, const Scenario& scenario, const BenchOptions& options) {
-    std::filesystem::create_directories(options.outDir);
-    const std::filesystem::path work = workFolder(options);
+    ScenarioRun scenarioRun(scenario, options);
+    const std::filesystem::path& work = scenarioRun.work();
     FF_ASSIGN_OR_RETURN(auto context, runtime::OffscreenContext::create());
     const int width = p.size[0];
     const int height = p.size[1];
@@ -341,9 +342,7 @@ Status runViews(const ViewsParams& p, const Scenario& scenario, const BenchOptio
 
     const std::filesystem::path csv = options.outDir / (scenario.name + ".csv");
     FF_RETURN_IF_ERROR(table.write(csv));
-    FF_RETURN_IF_ERROR(plotCharts("views", csv, options.outDir));
-    ReportFile mdFile(options.outDir, scenario.name, scenario.title, scenario.description);
-    std::ostream& md = mdFile.stream();
+    std::ostringstream md;
     md << "Command: `" << options.command << "`\n\n"
        << "Scene: " << describeScene(p.scene) << " (" << sceneSummary << "). Image " << width << "x"
        << height << "; reference: method full, " << p.supersample << "x" << p.supersample
@@ -355,9 +354,7 @@ Status runViews(const ViewsParams& p, const Scenario& scenario, const BenchOptio
        << table.markdown() << "\n![error against frame time](" << scenario.name << ".png)\n";
     if (p.sweep.active())
         md << "\n![error against " << p.sweep.parameter << "](" << scenario.name << "-sweep.png)\n";
-    FF_RETURN_IF_ERROR(mdFile.close());
-    removeWorkFolder(options);
-    return Status::ok();
+    return scenarioRun.finish("views", csv, md.str());
 }
 
 } // namespace

@@ -45,9 +45,4 @@ using BenchRun = std::function<Status(const BenchOptions&)>;
 /** The prepare function of the scenario's kind. */
 [[nodiscard]] Result<BenchRun> prepareScenario(const Scenario& scenario);
 
-/** The work folder for scene files (options.workDir, else OUT/scenes), created. */
-std::filesystem::path workFolder(const BenchOptions& options);
-/** Removes the work folder if it was the default one. */
-void removeWorkFolder(const BenchOptions& options);
-
 } // namespace ff::bench
