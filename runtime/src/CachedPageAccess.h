@@ -1,5 +1,7 @@
 #pragma once
 
+// Page access, frame layer over the resident layer: IPageAccess through the PageCache.
+
 #include <ff/cache/PageCache.h>
 #include <ff/runtime/PageAccess.h>
 

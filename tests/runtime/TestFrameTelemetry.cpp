@@ -8,6 +8,8 @@
 #include <nlohmann/json.hpp>
 
 #include <cmath>
+#include <fstream>
+#include <sstream>
 #include <string>
 #include <vector>
 
@@ -65,6 +67,18 @@ TEST(FrameTelemetryTest, CsvCellsAndJsonKeysFollowTheColumns) {
     EXPECT_EQ(row["stalled"], true);
     EXPECT_TRUE(row["psnr_db"].is_null());
     EXPECT_EQ(row["triangles"], 1234);
+}
+
+// docs/telemetry.md lists every column, in order, as "| N | `name` |".
+TEST(FrameTelemetryTest, TheDocumentationListsEveryColumnInOrder) {
+    std::ifstream in(std::string(FF_DOCS_DIR) + "/telemetry.md");
+    ASSERT_TRUE(in) << FF_DOCS_DIR << "/telemetry.md";
+    std::stringstream text;
+    text << in.rdbuf();
+    for (std::size_t i = 0; i < kPinnedColumns.size(); ++i) {
+        const std::string row = "| " + std::to_string(i + 1) + " | `" + kPinnedColumns[i] + "` |";
+        EXPECT_NE(text.str().find(row), std::string::npos) << row;
+    }
 }
 
 // Identical images score infinite PSNR: a measurement, kept as "inf" in CSV; JSON has no

@@ -1,7 +1,7 @@
 #include "Commands.h"
 #include "FrameFlags.h"
 #include "OutputFile.h"
-#include "SceneStats.h"
+#include <ff/bench/SceneStats.h>
 #include <ff/runtime/Units.h>
 
 #include <ff/storage/SceneFile.h>
@@ -15,6 +15,9 @@
 namespace ff::viewer {
 
 namespace {
+
+// The statistics live with the other measurements, in ff_bench.
+using namespace ff::bench;
 
 struct StatsArgs {
     std::string scene;

@@ -1,7 +1,9 @@
 #pragma once
 
-// The page cache: scene-file pages in memory under a hard byte budget, fetched in the
-// background. Architecture (who calls what):
+// Layers of page access (runtime/StreamingSession.h draws the whole stack): IPageSource below is
+// the source layer (where page bytes come from); PageCache is the resident layer (which pages
+// are in memory, under a hard budget). The page cache: scene-file pages in memory under a hard
+// byte budget, fetched in the background. Architecture (who calls what):
 //
 //   main thread:  beginFrame() -> tryGet(page) for what the frame wants to draw; request(page,
 //                 priority) for what it lacks -> endFrame(): cancels requests not renewed this

@@ -1,5 +1,7 @@
 #pragma once
 
+// Page access, source layer: the IPageSource of a scene file on a local disk.
+
 #include <ff/cache/PageCache.h>
 #include <ff/storage/Status.h>
 

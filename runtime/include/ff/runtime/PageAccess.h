@@ -1,5 +1,8 @@
 #pragma once
 
+// Page access, frame layer: what one frame sees of pages (Ready, Pending or Failed, never a
+// wait), over the memory map (MappedPageAccess) or the page cache (src/CachedPageAccess.h).
+
 #include <ff/storage/SceneFile.h>
 #include <ff/storage/SceneFormat.h>
 #include <ff/storage/Status.h>

@@ -1,6 +1,6 @@
-#include "SceneStats.h"
+#include <ff/bench/SceneStats.h>
 
-#include "CameraFlags.h"
+#include <ff/runtime/CameraOptions.h>
 
 #include <ff/builder/Generators.h>
 #include <ff/builder/SceneSink.h>
@@ -18,7 +18,7 @@
 #include <unordered_map>
 #include <unordered_set>
 
-namespace ff::viewer {
+namespace ff::bench {
 
 namespace {
 
@@ -546,4 +546,4 @@ nlohmann::json SceneStats::toJson() const {
     return out;
 }
 
-} // namespace ff::viewer
+} // namespace ff::bench

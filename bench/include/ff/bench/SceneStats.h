@@ -23,7 +23,7 @@
 #include <string>
 #include <vector>
 
-namespace ff::viewer {
+namespace ff::bench {
 
 /** Nodes of one level of one kind of hierarchy, with their cubes. */
 struct LevelStats {
@@ -143,4 +143,4 @@ struct CubeUsageOptions {
  *  instance (a 3x4 float transform). */
 [[nodiscard]] Result<InputSize> measureGeneratorInput(const std::string& spec);
 
-} // namespace ff::viewer
+} // namespace ff::bench
