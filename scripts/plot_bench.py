@@ -313,7 +313,27 @@ def bytes_read(data, methods, png):
     fig.savefig(png, dpi=110)
 
 
-KINDS = {"table2": table2, "forest": forest, "build": build, "paging": paging, "views": views, "path": path, "replay": replay}
+def render(data, out, name):
+    """Peak RSS of each view's frame against its limit, with the frame's cut beside it."""
+    fig, ax = plt.subplots(figsize=(7, 4.5))
+    labels = [r["view"] for r in data]
+    rss = [number(r["peak_rss_bytes"]) / 2**20 for r in data]
+    ax.bar(labels, rss, color="C0", label="peak RSS of the render process")
+    limits = [number(r["rss_limit_bytes"]) / 2**20 for r in data if r["rss_limit_bytes"]]
+    if limits:
+        ax.axhline(max(limits), color="C3", linestyle="--", label=f"limit {max(limits):.0f} MiB")
+    for i, r in enumerate(data):
+        ax.annotate(f"{int(number(r['nodes_visited'])):,} nodes\n{int(number(r['cubes_drawn'])):,} cubes",
+                    (i, rss[i]), ha="center", va="bottom", fontsize=7)
+    ax.set_ylabel("MiB")
+    ax.set_title("memory of one complete frame (farfield render)")
+    ax.grid(True, axis="y", alpha=0.3)
+    ax.legend(fontsize=8)
+    fig.tight_layout()
+    fig.savefig(out / f"{name}.png", dpi=110)
+
+
+KINDS = {"table2": table2, "forest": forest, "build": build, "paging": paging, "views": views, "path": path, "replay": replay, "render": render}
 
 
 def main():

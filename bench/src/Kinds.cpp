@@ -1,27 +1,42 @@
-// Which prepare function runs a scenario: the one table of benchmark kinds.
+// The one table of benchmark kinds: a scenario's "kind" names one row, which prepares it.
 
 #include <ff/bench/Benchmarks.h>
 
+#include <array>
+#include <utility>
+
 namespace ff::bench {
 
+namespace {
+
+using Prepare = Result<BenchRun> (*)(const Scenario&);
+
+constexpr std::array<std::pair<const char*, Prepare>, 8> kKinds = {{
+        {"table2", prepareTable2},
+        {"forest", prepareForest},
+        {"build", prepareBuild},
+        {"paging", preparePaging},
+        {"views", prepareViews},
+        {"path", preparePath},
+        {"replay", prepareReplay},
+        {"render", prepareRender},
+}};
+
+} // namespace
+
+std::vector<std::string> scenarioKinds() {
+    std::vector<std::string> names;
+    for (const auto& [name, prepare] : kKinds)
+        names.emplace_back(name);
+    return names;
+}
+
 Result<BenchRun> prepareScenario(const Scenario& scenario) {
-    if (scenario.kind == "table2")
-        return prepareTable2(scenario);
-    if (scenario.kind == "forest")
-        return prepareForest(scenario);
-    if (scenario.kind == "build")
-        return prepareBuild(scenario);
-    if (scenario.kind == "paging")
-        return preparePaging(scenario);
-    if (scenario.kind == "views")
-        return prepareViews(scenario);
-    if (scenario.kind == "path")
-        return preparePath(scenario);
-    if (scenario.kind == "replay")
-        return prepareReplay(scenario);
-    return Status(
-            ErrorCode::InvalidArgument,
-            scenario.where() + ": unknown kind \"" + scenario.kind + "\"");
+    for (const auto& [name, prepare] : kKinds) {
+        if (scenario.kind == name)
+            return prepare(scenario);
+    }
+    return Status(ErrorCode::InvalidArgument, scenario.where() + ": unknown kind \"" + scenario.kind + "\"");
 }
 
 } // namespace ff::bench

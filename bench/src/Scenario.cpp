@@ -117,9 +117,9 @@ Result<Scenario> loadScenario(const std::filesystem::path& file, bool quick) {
         reader.fail(
                 "kind",
                 std::string("missing; one of ") +
-                        joined({std::begin(kScenarioKinds), std::end(kScenarioKinds)}));
+                        joined(scenarioKinds()));
     else
-        reader.choice("kind", "", {std::begin(kScenarioKinds), std::end(kScenarioKinds)});
+        reader.choice("kind", "", scenarioKinds());
     if (!isSafeName(scenario.name))
         reader.fail(
                 "name",

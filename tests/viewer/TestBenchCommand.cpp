@@ -264,6 +264,36 @@ TEST(BenchCommandTest, StreamingPathScenarioChartsErrorAgainstBytesRead) {
     EXPECT_NE(readText(out / "tiny-path.md").find("](tiny-path-bytes.png)"), std::string::npos);
 }
 
+// A frame's peak memory, measured in a child `farfield render`, against a limit.
+TEST(BenchCommandTest, RenderScenarioMeasuresTheFramesPeakMemoryAgainstItsLimit) {
+    const fs::path dir = freshTestDir();
+    writeText(dir / "tiny-render.json", R"({
+  "name": "tiny-render",
+  "title": "A tiny render scenario",
+  "kind": "render",
+  "scene": {"generate": "molecule:spheres=200"},
+  "size": [64, 48],
+  "views": [{"label": "near", "flags": ["--distance", "1.5"]}, {"label": "far", "flags": ["--distance", "30"]}],
+  "rss_limit": "4GiB"
+})");
+    const fs::path out = dir / "out";
+    const ProcessResult r = runFarfield({"bench", (dir / "tiny-render.json").string(), "--out", out.string()}, dir);
+    ASSERT_EQ(r.exitCode, 0) << r.describe();
+    const std::vector<Row> rows = readCsv(out / "tiny-render.csv");
+    ASSERT_EQ(rows.size(), 3u);
+    for (std::size_t i = 1; i < rows.size(); ++i) {
+        EXPECT_GT(std::stoull(cell(rows, i, "peak_rss_bytes")), 1u << 20);
+        EXPECT_EQ(cell(rows, i, "rss_limit_bytes"), std::to_string(4ull << 30));
+        EXPECT_EQ(cell(rows, i, "within_limit"), "yes");
+        EXPECT_GT(std::stoull(cell(rows, i, "nodes_visited")), 0u);
+    }
+    EXPECT_EQ(cell(rows, 1, "view"), "near");
+    EXPECT_GT(std::stoull(cell(rows, 1, "triangles_drawn")), std::stoull(cell(rows, 2, "triangles_drawn")))
+            << "the flags reach the child: nearer draws more";
+    EXPECT_TRUE(fs::is_regular_file(out / "tiny-render.png"));
+    EXPECT_NE(readText(out / "tiny-render.md").find("| near |"), std::string::npos);
+}
+
 constexpr const char* kReplayScenario = R"({
   "name": "tiny-replay",
   "title": "A tiny replay scenario",

@@ -42,6 +42,10 @@ using BenchRun = std::function<Status(const BenchOptions&)>;
  *  budget: per-frame telemetry and the replay summary (the larger-than-RAM benchmark). */
 [[nodiscard]] Result<BenchRun> prepareReplay(const Scenario& scenario);
 
+/** One complete frame per view by a child `farfield render`: its time and peak RSS, against an
+ *  optional limit (the memory of a frame whatever its cut). */
+[[nodiscard]] Result<BenchRun> prepareRender(const Scenario& scenario);
+
 /** The prepare function of the scenario's kind. */
 [[nodiscard]] Result<BenchRun> prepareScenario(const Scenario& scenario);
 

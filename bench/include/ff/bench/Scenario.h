@@ -38,9 +38,8 @@ struct Scenario {
     std::string where() const;
 };
 
-/** Scenario kinds `farfield bench` knows. */
-inline constexpr const char* kScenarioKinds[] = {
-        "table2", "forest", "build", "paging", "views", "path", "replay"};
+/** Scenario kinds `farfield bench` knows, from the one table of kinds (src/Kinds.cpp). */
+std::vector<std::string> scenarioKinds();
 
 /**
  * Finds a scenario: an existing file path as given, or a bare name (no '/', no ".json") resolved
