@@ -82,6 +82,12 @@ struct StreamingSession::Impl {
     template <typename Finish>
     Status frame(const FrameContext& context, FrameOutput output, FrameStats& stats, double& prefetchMs,
                  Finish&& finish);
+    /** One frame into `result` (its stats start afresh). */
+    Status frameToImage(const FrameContext& context, Frame& result, double& prefetchMs);
+    /** A public frame call: pump, then `body` (one frame or, waiting, several), then the
+     *  telemetry of what `stats` ends as. */
+    template <typename Body>
+    Status call(const FrameContext& context, FrameStats& stats, Body&& body);
     void prefetch(const FrameContext& context, double& prefetchMs);
     void pump(std::size_t installs, double& pumpMs);
     void record(const FrameContext& context, const FrameStats& stats, double frameMs, double pumpMs,
@@ -180,6 +186,27 @@ Status StreamingSession::Impl::frame(const FrameContext& context, FrameOutput ou
     return Status::ok();
 }
 
+Status StreamingSession::Impl::frameToImage(const FrameContext& context, Frame& result, double& prefetchMs) {
+    result.stats = {};
+    return frame(context, FrameOutput::Image, result.stats, prefetchMs, [&]() -> Status {
+        FF_ASSIGN_OR_RETURN(result.image, renderer->finishImage(result.stats));
+        return Status::ok();
+    });
+}
+
+template <typename Body>
+Status StreamingSession::Impl::call(const FrameContext& context, FrameStats& stats, Body&& body) {
+    failures.clear();
+    const auto start = std::chrono::steady_clock::now();
+    double pumpMs = 0.0;
+    double prefetchMs = 0.0;
+    bool stalled = false;
+    pump(context.budgets.pageInstallsPerFrame, pumpMs);
+    FF_RETURN_IF_ERROR(body(prefetchMs, stalled));
+    record(context, stats, millisecondsSince(start), pumpMs, prefetchMs, stalled);
+    return Status::ok();
+}
+
 void StreamingSession::Impl::record(const FrameContext& context, const FrameStats& stats, double frameMs,
                                     double pumpMs, double prefetchMs, bool stalled) {
     FrameTelemetry t;
@@ -216,60 +243,37 @@ void StreamingSession::Impl::record(const FrameContext& context, const FrameStat
 
 Result<Frame> StreamingSession::render(const FrameContext& context) {
     Impl& s = *mImpl;
-    s.failures.clear();
-    const auto start = std::chrono::steady_clock::now();
-    double pumpMs = 0.0;
-    double prefetchMs = 0.0;
-    s.pump(context.budgets.pageInstallsPerFrame, pumpMs);
     Frame result;
-    FF_RETURN_IF_ERROR(s.frame(context, FrameOutput::Image, result.stats, prefetchMs, [&]() -> Status {
-        FF_ASSIGN_OR_RETURN(result.image, s.renderer->finishImage(result.stats));
-        return Status::ok();
+    FF_RETURN_IF_ERROR(s.call(context, result.stats, [&](double& prefetchMs, bool&) {
+        return s.frameToImage(context, result, prefetchMs);
     }));
-    s.record(context, result.stats, millisecondsSince(start), pumpMs, prefetchMs, false);
     return result;
 }
 
 Result<Frame> StreamingSession::renderComplete(const FrameContext& context) {
     Impl& s = *mImpl;
-    s.failures.clear();
-    const auto start = std::chrono::steady_clock::now();
-    double pumpMs = 0.0;
-    double prefetchMs = 0.0;
-    s.pump(context.budgets.pageInstallsPerFrame, pumpMs);
     Frame result;
-    const auto once = [&]() -> Status {
-        result.stats = {};
-        return s.frame(context, FrameOutput::Image, result.stats, prefetchMs, [&]() -> Status {
-            FF_ASSIGN_OR_RETURN(result.image, s.renderer->finishImage(result.stats));
-            return Status::ok();
-        });
-    };
-    FF_RETURN_IF_ERROR(once());
-    bool stalled = false;
-    while (s.cache && result.stats.nodesDeferred > 0) {
-        const std::uint64_t before = s.cache->stats().completed;
-        s.cache->drain();
-        stalled = true;
-        FF_RETURN_IF_ERROR(once());
-        if (s.cache->stats().completed == before)
-            break; // nothing more fits the budget: this frame is as good as it gets
-    }
-    s.record(context, result.stats, millisecondsSince(start), pumpMs, prefetchMs, stalled);
+    FF_RETURN_IF_ERROR(s.call(context, result.stats, [&](double& prefetchMs, bool& stalled) -> Status {
+        FF_RETURN_IF_ERROR(s.frameToImage(context, result, prefetchMs));
+        while (s.cache && result.stats.nodesDeferred > 0) {
+            const std::uint64_t before = s.cache->stats().completed;
+            s.cache->drain();
+            stalled = true;
+            FF_RETURN_IF_ERROR(s.frameToImage(context, result, prefetchMs));
+            if (s.cache->stats().completed == before)
+                break; // nothing more fits the budget: this frame is as good as it gets
+        }
+        return Status::ok();
+    }));
     return result;
 }
 
 Result<FrameStats> StreamingSession::present(const FrameContext& context) {
     Impl& s = *mImpl;
-    s.failures.clear();
-    const auto start = std::chrono::steady_clock::now();
-    double pumpMs = 0.0;
-    double prefetchMs = 0.0;
-    s.pump(context.budgets.pageInstallsPerFrame, pumpMs);
     FrameStats stats;
-    FF_RETURN_IF_ERROR(s.frame(context, FrameOutput::Window, stats, prefetchMs,
-                               [&] { return s.renderer->finishPresent(stats); }));
-    s.record(context, stats, millisecondsSince(start), pumpMs, prefetchMs, false);
+    FF_RETURN_IF_ERROR(s.call(context, stats, [&](double& prefetchMs, bool&) {
+        return s.frame(context, FrameOutput::Window, stats, prefetchMs, [&] { return s.renderer->finishPresent(stats); });
+    }));
     return stats;
 }
 

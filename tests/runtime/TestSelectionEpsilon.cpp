@@ -7,6 +7,7 @@
 #include <ff/builder/Generators.h>
 #include <ff/builder/SceneBuilder.h>
 #include "RecordingSink.h"
+#include "TestDir.h"
 
 #include <ff/runtime/BackToFrontTraversal.h>
 #include <ff/storage/SceneFile.h>
@@ -26,13 +27,7 @@ namespace fs = std::filesystem;
 
 constexpr float kViewportHeight = 480.0f;
 
-fs::path freshDir() {
-    const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
-    const fs::path dir = fs::path(FF_TEST_TMP_DIR) / (std::string(info->test_suite_name()) + "." + info->name());
-    fs::remove_all(dir);
-    fs::create_directories(dir);
-    return dir;
-}
+using test::freshDir;
 
 class SelectionEpsilonTest : public ::testing::Test {
 protected:

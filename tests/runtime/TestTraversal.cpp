@@ -5,6 +5,7 @@
 // instancing written with SceneWriter (a few pages that expand to any cut size).
 
 #include "RecordingSink.h"
+#include "TestDir.h"
 
 #include <ff/builder/Generators.h>
 #include <ff/builder/SceneBuilder.h>
@@ -29,13 +30,7 @@ namespace {
 
 namespace fs = std::filesystem;
 
-fs::path freshDir() {
-    const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
-    const fs::path dir = fs::path(FF_TEST_TMP_DIR) / (std::string(info->test_suite_name()) + "." + info->name());
-    fs::remove_all(dir);
-    fs::create_directories(dir);
-    return dir;
-}
+using test::freshDir;
 
 /** The memory map, except that `pending` pages are not resident yet; records every lookup. */
 class FakePageAccess final : public IPageAccess {
