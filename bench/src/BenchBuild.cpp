@@ -2,15 +2,16 @@
 // `farfield build` so its peak RSS (ru_maxrss) is its own.
 
 #include "BenchSupport.h"
+
 #include <ff/bench/Benchmarks.h>
 #include <ff/runtime/Units.h>
 
 #include <nlohmann/json.hpp>
+#include <sys/resource.h>
+#include <sys/wait.h>
 
 #include <chrono>
 #include <cstdio>
-#include <sys/resource.h>
-#include <sys/wait.h>
 #include <thread>
 #include <unistd.h>
 

@@ -2,8 +2,8 @@
 // trees, rendered from one fixed viewpoint; frame time against scene size on log-log axes.
 
 #include "BenchSupport.h"
-#include <ff/bench/Benchmarks.h>
 
+#include <ff/bench/Benchmarks.h>
 #include <ff/runtime/OffscreenContext.h>
 
 #include <array>

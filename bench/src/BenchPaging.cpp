@@ -4,8 +4,9 @@
 // each replay's memory is its own.
 
 #include "BenchSupport.h"
-#include <ff/bench/Benchmarks.h>
 #include "ScenarioParts.h"
+
+#include <ff/bench/Benchmarks.h>
 
 #include <nlohmann/json.hpp>
 

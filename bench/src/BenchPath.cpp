@@ -5,15 +5,15 @@
 // frame-to-frame change beyond the reference's). Keys: bench/README.md.
 
 #include "BenchSupport.h"
-#include <ff/bench/Benchmarks.h>
-#include <ff/runtime/CameraOptions.h>
-#include <ff/runtime/Percentile.h>
 #include "ScenarioParts.h"
 
+#include <ff/bench/Benchmarks.h>
+#include <ff/runtime/CameraOptions.h>
 #include <ff/runtime/CameraPathGenerators.h>
 #include <ff/runtime/FrameTelemetry.h>
 #include <ff/runtime/ImageMetrics.h>
 #include <ff/runtime/OffscreenContext.h>
+#include <ff/runtime/Percentile.h>
 
 #include <algorithm>
 #include <array>

@@ -6,8 +6,9 @@
 // scene file is removed as soon as the replay is done. Keys: bench/README.md.
 
 #include "BenchSupport.h"
-#include <ff/bench/Benchmarks.h>
 #include "ScenarioParts.h"
+
+#include <ff/bench/Benchmarks.h>
 #include <ff/runtime/Units.h>
 
 #include <nlohmann/json.hpp>

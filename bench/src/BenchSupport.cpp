@@ -1,17 +1,17 @@
 #include "BenchSupport.h"
 
 #include <ff/bench/Benchmarks.h>
-
 #include <ff/builder/Generators.h>
 #include <ff/builder/SceneBuilder.h>
+
+#include <sys/resource.h>
+#include <sys/wait.h>
 
 #include <algorithm>
 #include <cstdio>
 #include <fstream>
 #include <chrono>
 #include <fcntl.h>
-#include <sys/resource.h>
-#include <sys/wait.h>
 #include <unistd.h>
 
 namespace ff::bench {

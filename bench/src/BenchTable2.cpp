@@ -3,9 +3,9 @@
 // faces per level, triangles drawn; plus accuracy against a 4x4 supersampled reference.
 
 #include "BenchSupport.h"
-#include <ff/bench/Benchmarks.h>
 #include "ScenarioParts.h"
 
+#include <ff/bench/Benchmarks.h>
 #include <ff/runtime/ImageMetrics.h>
 #include <ff/runtime/OffscreenContext.h>
 

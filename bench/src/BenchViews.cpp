@@ -4,10 +4,10 @@
 // holes and over-coverage. Keys: bench/README.md.
 
 #include "BenchSupport.h"
-#include <ff/bench/Benchmarks.h>
-#include <ff/runtime/CameraOptions.h>
 #include "ScenarioParts.h"
 
+#include <ff/bench/Benchmarks.h>
+#include <ff/runtime/CameraOptions.h>
 #include <ff/runtime/ImageMetrics.h>
 #include <ff/runtime/OffscreenContext.h>
 

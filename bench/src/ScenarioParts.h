@@ -4,8 +4,8 @@
 // methods compared, the full reference. Keys and meanings: bench/README.md.
 
 #include "BenchSupport.h"
-#include <ff/bench/Scenario.h>
 
+#include <ff/bench/Scenario.h>
 #include <ff/runtime/CameraPathGenerators.h>
 #include <ff/runtime/Selection.h>
 #include <ff/storage/Status.h>

@@ -1,11 +1,10 @@
 #include <ff/bench/SceneStats.h>
 
-#include <ff/runtime/CameraOptions.h>
-
 #include <ff/builder/Generators.h>
 #include <ff/builder/SceneSink.h>
-#include <ff/runtime/CameraPathGenerators.h>
 #include <ff/runtime/BackToFrontTraversal.h>
+#include <ff/runtime/CameraOptions.h>
+#include <ff/runtime/CameraPathGenerators.h>
 #include <ff/runtime/FrameStats.h>
 #include <ff/runtime/PageAccess.h>
 

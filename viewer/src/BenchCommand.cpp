@@ -4,10 +4,10 @@
 
 #include "Commands.h"
 #include "OutputFile.h"
+
 #include <ff/bench/Benchmarks.h>
 
 #include <unistd.h>
-
 #include <climits>
 #include <cstdio>
 #include <memory>
@@ -146,7 +146,6 @@ int runBench(const BenchArgs& args) {
 }
 
 } // namespace
-
 
 CommandRunner addBenchCommand(CLI::App& app) {
     auto args = std::make_shared<BenchArgs>();

@@ -2,10 +2,10 @@
 #include "OutputFile.h"
 #include "ProgressBar.h"
 #include "SceneInput.h"
-#include <ff/runtime/Units.h>
 
 #include <ff/builder/Generators.h>
 #include <ff/builder/SceneBuilder.h>
+#include <ff/runtime/Units.h>
 
 #include <glm/gtc/matrix_transform.hpp>
 #include <nlohmann/json.hpp>

@@ -1,12 +1,11 @@
 #include "Hud.h"
 
+#include <ff/runtime/GlProgram.h>
 #include <ff/runtime/Units.h>
 
-#include <ff/runtime/GlProgram.h>
-
 #include <glad/gl.h>
-#include <stb_easy_font.h>
 
+#include <stb_easy_font.h>
 #include <algorithm>
 #include <cmath>
 #include <cstdio>

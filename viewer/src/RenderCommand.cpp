@@ -2,10 +2,10 @@
 #include "Commands.h"
 #include "FrameFlags.h"
 #include "OutputFile.h"
-#include <ff/runtime/Units.h>
 
 #include <ff/runtime/OffscreenContext.h>
 #include <ff/runtime/StreamingSession.h>
+#include <ff/runtime/Units.h>
 
 #include <nlohmann/json.hpp>
 

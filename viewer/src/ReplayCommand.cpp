@@ -7,15 +7,15 @@
 #include "FrameFlags.h"
 #include "ImageOutput.h"
 #include "OutputFile.h"
-#include <ff/runtime/Percentile.h>
-#include <ff/runtime/Units.h>
 
 #include <ff/runtime/CameraPath.h>
 #include <ff/runtime/FrameTelemetry.h>
 #include <ff/runtime/ImageMetrics.h>
 #include <ff/runtime/OffscreenContext.h>
 #include <ff/runtime/PathCuts.h>
+#include <ff/runtime/Percentile.h>
 #include <ff/runtime/StreamingSession.h>
+#include <ff/runtime/Units.h>
 #include <ff/storage/ProcessMemory.h>
 
 #include <nlohmann/json.hpp>
@@ -26,9 +26,7 @@
 #include <cstdio>
 #include <fstream>
 #include <memory>
-#include <mutex>
 #include <string>
-#include <unordered_set>
 #include <vector>
 
 namespace ff::viewer {

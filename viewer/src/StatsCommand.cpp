@@ -1,9 +1,9 @@
 #include "Commands.h"
 #include "FrameFlags.h"
 #include "OutputFile.h"
+
 #include <ff/bench/SceneStats.h>
 #include <ff/runtime/Units.h>
-
 #include <ff/storage/SceneFile.h>
 
 #include <cstdio>

@@ -4,11 +4,11 @@
 #include "FrameFlags.h"
 #include "Hud.h"
 #include "OutputFile.h"
-#include <ff/runtime/Units.h>
 #include "ViewerControls.h"
 #include "Window.h"
 
 #include <ff/runtime/StreamingSession.h>
+#include <ff/runtime/Units.h>
 #include <ff/storage/SceneFile.h>
 
 #include <nlohmann/json.hpp>
