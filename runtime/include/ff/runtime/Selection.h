@@ -40,7 +40,7 @@ std::vector<std::string> cubeStyleNames();
 /**
  * Told of what selection draws, for analysis tools (`farfield stats --paths`) and tests. Optional:
  * with no observer set, selection pays one null check per drawn cube and nothing else.
- * Called on the thread that runs select(), during select().
+ * Called on the thread that runs the traversal, during ITraversal::traverse().
  */
 class ISelectionObserver {
 public:
@@ -65,7 +65,7 @@ struct SelectionOptions {
     /** Multiplies the priority of the pages this selection asks for (prefetch asks below the
      *  frame being drawn). */
     float priorityScale = 1.0f;
-    /** If set, told of every drawn cube (borrowed; must outlive the select() calls). */
+    /** If set, told of every drawn cube (borrowed; must outlive the traversals that use it). */
     ISelectionObserver* observer = nullptr;
 };
 
