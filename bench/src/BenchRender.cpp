@@ -44,30 +44,56 @@ Status runRender(const RenderParams& p, const Scenario& scenario, const BenchOpt
     if (auto parsed = runtime::parseByteSize(p.rssLimit); !p.rssLimit.empty() && parsed)
         limit = *parsed;
 
-    CsvTable table({"view", "width", "height", "seconds", "peak_rss_bytes", "rss_limit_bytes", "within_limit",
-                    "nodes_visited", "triangles_drawn", "cubes_drawn", "select_ms", "draw_ms", "file_bytes",
-                    "build_seconds", "build_peak_rss_bytes"});
+    CsvTable table(
+            {"view",
+             "width",
+             "height",
+             "seconds",
+             "peak_rss_bytes",
+             "rss_limit_bytes",
+             "within_limit",
+             "nodes_visited",
+             "triangles_drawn",
+             "cubes_drawn",
+             "select_ms",
+             "draw_ms",
+             "file_bytes",
+             "build_seconds",
+             "build_peak_rss_bytes"});
     for (const RenderView& view : p.views) {
         std::fprintf(stderr, "%s: view %s\n", scenario.name.c_str(), view.label.c_str());
         const std::filesystem::path stats = work / (view.label + "-stats.json");
-        std::vector<std::string> argv = {options.selfExe, "render", scenePath.string(), "--size",
-                                         std::to_string(p.size[0]) + "x" + std::to_string(p.size[1]),
-                                         "--stats", stats.string()};
+        std::vector<std::string> argv = {
+                options.selfExe,
+                "render",
+                scenePath.string(),
+                "--size",
+                std::to_string(p.size[0]) + "x" + std::to_string(p.size[1]),
+                "--stats",
+                stats.string()};
         argv.insert(argv.end(), view.flags.begin(), view.flags.end());
         FF_ASSIGN_OR_RETURN(const ChildRun render, runChild(argv));
-        FF_ASSIGN_OR_RETURN(const nlohmann::json report, readJsonObject(stats, "render statistics"));
+        FF_ASSIGN_OR_RETURN(
+                const nlohmann::json report, readJsonObject(stats, "render statistics"));
         const nlohmann::json frame = report.value("frames", nlohmann::json::array()).empty()
                                              ? nlohmann::json::object()
                                              : report["frames"].back();
-        table.addRow({view.label, std::to_string(p.size[0]), std::to_string(p.size[1]), formatNumber(render.seconds),
-                      std::to_string(render.peakRssBytes), limit ? std::to_string(limit) : "",
-                      limit ? (render.peakRssBytes <= limit ? "yes" : "no") : "",
-                      std::to_string(frame.value("nodes_visited", std::uint64_t{0})),
-                      std::to_string(frame.value("triangles_drawn", std::uint64_t{0})),
-                      std::to_string(frame.value("cubes_drawn", std::uint64_t{0})),
-                      formatNumber(frame.value("select_ms", 0.0)), formatNumber(frame.value("draw_ms", 0.0)),
-                      std::to_string(std::filesystem::file_size(scenePath)), formatNumber(build.seconds),
-                      std::to_string(build.peakRssBytes)});
+        table.addRow(
+                {view.label,
+                 std::to_string(p.size[0]),
+                 std::to_string(p.size[1]),
+                 formatNumber(render.seconds),
+                 std::to_string(render.peakRssBytes),
+                 limit ? std::to_string(limit) : "",
+                 limit ? (render.peakRssBytes <= limit ? "yes" : "no") : "",
+                 std::to_string(frame.value("nodes_visited", std::uint64_t{0})),
+                 std::to_string(frame.value("triangles_drawn", std::uint64_t{0})),
+                 std::to_string(frame.value("cubes_drawn", std::uint64_t{0})),
+                 formatNumber(frame.value("select_ms", 0.0)),
+                 formatNumber(frame.value("draw_ms", 0.0)),
+                 std::to_string(std::filesystem::file_size(scenePath)),
+                 formatNumber(build.seconds),
+                 std::to_string(build.peakRssBytes)});
         std::filesystem::remove(stats);
     }
     std::filesystem::remove(scenePath);
@@ -75,9 +101,10 @@ Status runRender(const RenderParams& p, const Scenario& scenario, const BenchOpt
     FF_RETURN_IF_ERROR(table.write(csv));
     std::ostringstream md;
     md << "`" << options.command << "`: scene "
-       << (p.scene.gltf.empty() ? "`--generate " + p.scene.generate + "`" : "`" + p.scene.gltf + "`")
-       << ", one complete frame per view by a child `farfield render` at " << p.size[0] << "x" << p.size[1]
-       << " (every page mapped); peak RSS is the child's ru_maxrss"
+       << (p.scene.gltf.empty() ? "`--generate " + p.scene.generate + "`"
+                                : "`" + p.scene.gltf + "`")
+       << ", one complete frame per view by a child `farfield render` at " << p.size[0] << "x"
+       << p.size[1] << " (every page mapped); peak RSS is the child's ru_maxrss"
        << (limit ? ", against a limit of " + runtime::formatBytes(limit) : std::string()) << ".\n\n"
        << table.markdown() << "\n![peak memory of a frame](" << scenario.name << ".png)\n";
     return scenarioRun.finish("render", csv, md.str());
@@ -107,7 +134,8 @@ Result<BenchRun> prepareRender(const Scenario& scenario) {
             reader.fail("views", "needs at least one view");
     }
     FF_RETURN_IF_ERROR(reader.finish());
-    return BenchRun([p, scenario](const BenchOptions& options) { return runRender(p, scenario, options); });
+    return BenchRun(
+            [p, scenario](const BenchOptions& options) { return runRender(p, scenario, options); });
 }
 
 } // namespace ff::bench

@@ -36,7 +36,9 @@ Result<BenchRun> prepareScenario(const Scenario& scenario) {
         if (scenario.kind == name)
             return prepare(scenario);
     }
-    return Status(ErrorCode::InvalidArgument, scenario.where() + ": unknown kind \"" + scenario.kind + "\"");
+    return Status(
+            ErrorCode::InvalidArgument,
+            scenario.where() + ": unknown kind \"" + scenario.kind + "\"");
 }
 
 } // namespace ff::bench

@@ -13,7 +13,9 @@ namespace ff::runtime {
 
 namespace {
 
-glm::vec3 toVec3(const std::array<float, 3>& a) { return {a[0], a[1], a[2]}; }
+glm::vec3 toVec3(const std::array<float, 3>& a) {
+    return {a[0], a[1], a[2]};
+}
 
 glm::mat4 instanceTransform(const storage::InstanceRecord& instance) {
     glm::mat4 m(1.0f);
@@ -38,9 +40,10 @@ float cubeAnisotropy(const storage::NodeRecord& node) {
     float lo = 1.0f;
     float hi = 0.0f;
     for (int axis = 0; axis < 3; ++axis) {
-        const float alpha = (static_cast<float>(node.cube[static_cast<std::size_t>(2 * axis)][3]) +
-                             static_cast<float>(node.cube[static_cast<std::size_t>(2 * axis + 1)][3])) /
-                            (2.0f * 255.0f);
+        const float alpha =
+                (static_cast<float>(node.cube[static_cast<std::size_t>(2 * axis)][3]) +
+                 static_cast<float>(node.cube[static_cast<std::size_t>(2 * axis + 1)][3])) /
+                (2.0f * 255.0f);
         lo = std::min(lo, alpha);
         hi = std::max(hi, alpha);
     }
@@ -68,7 +71,9 @@ bool drawsCubesAsPoints(const SelectionOptions& options) {
            (options.cubeStyle == CubeStyle::Auto && options.epsilonPixels <= kAutoPointsMaxEpsilon);
 }
 
-template <typename T> std::size_t capacityBytes(const std::vector<T>& v) { return v.capacity() * sizeof(T); }
+template <typename T> std::size_t capacityBytes(const std::vector<T>& v) {
+    return v.capacity() * sizeof(T);
+}
 
 } // namespace
 
@@ -83,21 +88,24 @@ BackToFrontTraversal::BackToFrontTraversal(const storage::SceneFile& scene, IPag
 
 std::size_t BackToFrontTraversal::scratchBytes() const noexcept {
     std::size_t bytes = capacityBytes(mList.transforms) + capacityBytes(mList.localEyes) +
-                        capacityBytes(mList.geometry) + capacityBytes(mList.cubes) + capacityBytes(mActive) +
-                        capacityBytes(mChildStack) + capacityBytes(mSegments);
+                        capacityBytes(mList.geometry) + capacityBytes(mList.cubes) +
+                        capacityBytes(mActive) + capacityBytes(mChildStack) +
+                        capacityBytes(mSegments);
     for (const auto& runs : mPrototypeGeometry)
         bytes += capacityBytes(runs);
     return bytes;
 }
 
-Status BackToFrontTraversal::traverse(const FrameContext& frame, TraversalServices services, FrameStats& stats) {
+Status BackToFrontTraversal::traverse(
+        const FrameContext& frame, TraversalServices services, FrameStats& stats) {
     mFrame = &frame;
     mServices = &services;
     mNewFailures.clear();
     mSpilled = false;
     mSinkStatus = Status::ok();
     mPixelScale = frame.camera.pixelScale(static_cast<float>(frame.height));
-    const float aspect = static_cast<float>(frame.width) / std::max(static_cast<float>(frame.height), 1.0f);
+    const float aspect =
+            static_cast<float>(frame.width) / std::max(static_cast<float>(frame.height), 1.0f);
     mViewProjection = frame.camera.projection(aspect) * frame.camera.view();
     FF_RETURN_IF_ERROR(walk(Pass::Everything, stats));
     if (mSpilled) {
@@ -135,9 +143,15 @@ void BackToFrontTraversal::addToList(ActiveTransform& active) {
 }
 
 void BackToFrontTraversal::pushActive(const glm::mat4& transform, std::uint64_t instancePath) {
-    const glm::vec3 localEye = glm::vec3(glm::inverse(transform) * glm::vec4(mFrame->camera.eye, 1.0f));
-    mActive.push_back({transform, localEye, TransformMetric(transform), Frustum(mViewProjection * transform),
-                       instancePath, 0});
+    const glm::vec3 localEye =
+            glm::vec3(glm::inverse(transform) * glm::vec4(mFrame->camera.eye, 1.0f));
+    mActive.push_back(
+            {transform,
+             localEye,
+             TransformMetric(transform),
+             Frustum(mViewProjection * transform),
+             instancePath,
+             0});
     addToList(mActive.back());
     flushIfFull();
 }
@@ -173,7 +187,10 @@ void BackToFrontTraversal::reportFailure(const Status& failure) {
 }
 
 BackToFrontTraversal::Fetch BackToFrontTraversal::fetch(
-        std::uint64_t page, storage::PageType type, float priority, std::span<const std::byte>& payload) {
+        std::uint64_t page,
+        storage::PageType type,
+        float priority,
+        std::span<const std::byte>& payload) {
     const PageLookup lookup = mPages.lookup(page, type, priority);
     if (lookup.availability == PageAvailability::Ready) {
         payload = lookup.payload;
@@ -185,8 +202,8 @@ BackToFrontTraversal::Fetch BackToFrontTraversal::fetch(
     return Fetch::Missing;
 }
 
-BackToFrontTraversal::Fetch BackToFrontTraversal::readNode(
-        storage::NodeRef ref, float priority, storage::NodeRecord& out) {
+BackToFrontTraversal::Fetch
+BackToFrontTraversal::readNode(storage::NodeRef ref, float priority, storage::NodeRecord& out) {
     std::span<const std::byte> payload;
     if (fetch(ref.page, storage::PageType::Nodes, priority, payload) != Fetch::Ready)
         return Fetch::Missing;
@@ -199,7 +216,8 @@ BackToFrontTraversal::Fetch BackToFrontTraversal::readNode(
     return Fetch::Ready;
 }
 
-BackToFrontTraversal::Fetch BackToFrontTraversal::collectGeometry(const storage::NodeRecord& node, float priority) {
+BackToFrontTraversal::Fetch
+BackToFrontTraversal::collectGeometry(const storage::NodeRecord& node, float priority) {
     mSegments.clear();
     if (node.geometryCount == 0 || !isCell(node))
         return Fetch::Ready;
@@ -224,7 +242,8 @@ BackToFrontTraversal::Fetch BackToFrontTraversal::collectGeometry(const storage:
     return result;
 }
 
-void BackToFrontTraversal::defer(const storage::NodeRecord& node, storage::NodeRef ref, std::size_t active) {
+void BackToFrontTraversal::defer(
+        const storage::NodeRecord& node, storage::NodeRef ref, std::size_t active) {
     ++mStats->nodesDeferred;
     if (node.flags & storage::kNodeHasCube)
         emitCube(node, ref, active);
@@ -233,8 +252,10 @@ void BackToFrontTraversal::defer(const storage::NodeRecord& node, storage::NodeR
 void BackToFrontTraversal::visit(
         const storage::NodeRecord& node, storage::NodeRef ref, std::size_t active, int depth) {
     if (depth > kMaxNesting) {
-        reportFailure(Status(ErrorCode::Corrupt, "node nesting deeper than " + std::to_string(kMaxNesting) +
-                                                         " levels: the hierarchy has a reference cycle"));
+        reportFailure(
+                Status(ErrorCode::Corrupt,
+                       "node nesting deeper than " + std::to_string(kMaxNesting) +
+                               " levels: the hierarchy has a reference cycle"));
         return;
     }
     ++mStats->nodesVisited;
@@ -259,7 +280,8 @@ void BackToFrontTraversal::visit(
     const glm::vec3 cellMax = toVec3(node.cellMax);
     const glm::vec3& localEye = frame.localEye;
     const TransformMetric& metric = frame.metric;
-    const float size = std::sqrt(metric.projectedArea(cellMin, cellMax, localEye)); // a square's side
+    const float size =
+            std::sqrt(metric.projectedArea(cellMin, cellMax, localEye)); // a square's side
     const float nearest = metric.nearestDistance(cellMin, cellMax, localEye);
     float projected = INFINITY;
     if (mFrame->camera.orthographic)
@@ -283,7 +305,9 @@ void BackToFrontTraversal::visit(
             return;
         }
         ++mStats->instancesEntered;
-        pushActive(frame.matrix * instanceTransform(instance), childInstancePath(frame.instancePath, instanceIndex));
+        pushActive(
+                frame.matrix * instanceTransform(instance),
+                childInstancePath(frame.instancePath, instanceIndex));
         visit(root, rootRef, mActive.size() - 1, depth + 1);
         mActive.pop_back();
         return;
@@ -292,8 +316,10 @@ void BackToFrontTraversal::visit(
     // Refining needs the cell's own triangles and its children's page; without either, the
     // cell's cube stands in for the whole subtree this frame.
     std::span<const std::byte> childPage;
-    const bool childrenReady = node.childCount == 0 ||
-                               fetch(node.firstChild.page, storage::PageType::Nodes, priority, childPage) == Fetch::Ready;
+    const bool childrenReady =
+            node.childCount == 0 ||
+            fetch(node.firstChild.page, storage::PageType::Nodes, priority, childPage) ==
+                    Fetch::Ready;
     const bool geometryReady = collectGeometry(node, priority) == Fetch::Ready;
     if (!childrenReady || !geometryReady) {
         defer(node, ref, active);
@@ -317,8 +343,10 @@ void BackToFrontTraversal::visit(
         const glm::vec3 d = 0.5f * (toVec3(child->cellMin) + toVec3(child->cellMax)) - localEye;
         mChildStack.push_back({*child, childRef, metric.worldLengthSquared(d)});
     }
-    std::sort(mChildStack.begin() + static_cast<std::ptrdiff_t>(base), mChildStack.end(),
-              [](const ChildEntry& a, const ChildEntry& b) { return a.distance > b.distance; });
+    std::sort(
+            mChildStack.begin() + static_cast<std::ptrdiff_t>(base),
+            mChildStack.end(),
+            [](const ChildEntry& a, const ChildEntry& b) { return a.distance > b.distance; });
     for (std::size_t i = base; i < base + node.childCount; ++i) {
         const ChildEntry child = mChildStack[i]; // the stack may grow below
         visit(child.record, child.ref, active, depth + 1);
@@ -331,7 +359,8 @@ void BackToFrontTraversal::emitGeometry(
     mStats->trianglesDrawn += segment.count;
     if (mPass == Pass::CubesOnly)
         return;
-    mList.geometry.push_back({segment.page, payload, segment.firstSlot, segment.count, mActive[active].listIndex});
+    mList.geometry.push_back(
+            {segment.page, payload, segment.firstSlot, segment.count, mActive[active].listIndex});
     flushIfFull();
 }
 
@@ -361,10 +390,12 @@ void BackToFrontTraversal::mergeGeometryDraws() {
     mStats->geometryDraws += out;
 }
 
-void BackToFrontTraversal::emitCube(const storage::NodeRecord& node, storage::NodeRef ref, std::size_t active) {
+void BackToFrontTraversal::emitCube(
+        const storage::NodeRecord& node, storage::NodeRef ref, std::size_t active) {
     if (mPass == Pass::CubesOnly) {
         // Counted (and reported to the observer) by the first pass.
-        mList.cubes.push_back({toVec3(node.cellMin), toVec3(node.cellMax), mActive[active].listIndex, node.cube});
+        mList.cubes.push_back(
+                {toVec3(node.cellMin), toVec3(node.cellMax), mActive[active].listIndex, node.cube});
         flushIfFull();
         return;
     }
@@ -408,8 +439,10 @@ void BackToFrontTraversal::collectPrototypeGeometry(std::uint32_t prototype) {
     std::vector<storage::GeometrySegment> runs;
     while (!stack.empty()) {
         if (budget-- == 0) {
-            reportFailure(Status(ErrorCode::Corrupt, "prototype " + std::to_string(prototype) +
-                                                             ": its hierarchy has a reference cycle"));
+            reportFailure(
+                    Status(ErrorCode::Corrupt,
+                           "prototype " + std::to_string(prototype) +
+                                   ": its hierarchy has a reference cycle"));
             break;
         }
         const storage::NodeRecord node = stack.back();
@@ -431,7 +464,8 @@ void BackToFrontTraversal::collectPrototypeGeometry(std::uint32_t prototype) {
             complete = false;
         for (std::uint32_t c = 0; c < node.childCount; ++c) {
             storage::NodeRecord child{};
-            if (readNode(storage::SceneFile::childRef(node, c), kTopPriority, child) == Fetch::Ready)
+            if (readNode(storage::SceneFile::childRef(node, c), kTopPriority, child) ==
+                Fetch::Ready)
                 stack.push_back(child);
             else
                 complete = false;
@@ -442,7 +476,8 @@ void BackToFrontTraversal::collectPrototypeGeometry(std::uint32_t prototype) {
     });
     runs.clear();
     for (const storage::GeometrySegment& s : merged) {
-        if (!runs.empty() && runs.back().page == s.page && runs.back().firstSlot + runs.back().count == s.firstSlot)
+        if (!runs.empty() && runs.back().page == s.page &&
+            runs.back().firstSlot + runs.back().count == s.firstSlot)
             runs.back().count += s.count;
         else
             runs.push_back(s);

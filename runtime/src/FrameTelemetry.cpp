@@ -18,10 +18,16 @@ struct Value {
     double real = 0.0;
 };
 
-Value count(std::uint64_t v) { return {Value::Kind::Count, v, 0.0}; }
+Value count(std::uint64_t v) {
+    return {Value::Kind::Count, v, 0.0};
+}
 // Infinity is a measurement (PSNR of identical images): "inf" in CSV, null in JSON. NaN is not.
-Value real(double v) { return std::isnan(v) ? Value{} : Value{Value::Kind::Real, 0, v}; }
-Value flag(bool v) { return {Value::Kind::Flag, v ? 1u : 0u, 0.0}; }
+Value real(double v) {
+    return std::isnan(v) ? Value{} : Value{Value::Kind::Real, 0, v};
+}
+Value flag(bool v) {
+    return {Value::Kind::Flag, v ? 1u : 0u, 0.0};
+}
 
 struct Column {
     TelemetryColumn column;
@@ -33,45 +39,71 @@ struct Column {
 const std::vector<Column>& columns() {
     using T = const FrameTelemetry&;
     static const std::vector<Column> table = {
-            {{"frame", "frame index since the session opened"}, [](T t) { return count(static_cast<std::uint64_t>(t.frame)); }},
-            {{"time_s", "the frame's time (camera path time), seconds"}, [](T t) { return real(t.timeSeconds); }},
+            {{"frame", "frame index since the session opened"},
+             [](T t) { return count(static_cast<std::uint64_t>(t.frame)); }},
+            {{"time_s", "the frame's time (camera path time), seconds"},
+             [](T t) { return real(t.timeSeconds); }},
             {{"frame_ms", "the whole frame, wall clock"}, [](T t) { return real(t.frameMs); }},
-            {{"select_ms", "traversal, less the batches drawn meanwhile"}, [](T t) { return real(t.stats.selectMs); }},
-            {{"draw_ms", "uploads, draw calls and the GPU until done"}, [](T t) { return real(t.stats.drawMs); }},
+            {{"select_ms", "traversal, less the batches drawn meanwhile"},
+             [](T t) { return real(t.stats.selectMs); }},
+            {{"draw_ms", "uploads, draw calls and the GPU until done"},
+             [](T t) { return real(t.stats.drawMs); }},
             {{"requests", "page requests queued"}, [](T t) { return count(t.requests); }},
             {{"hits", "page lookups found resident"}, [](T t) { return count(t.hits); }},
             {{"misses", "page lookups not resident"}, [](T t) { return count(t.misses); }},
-            {{"bytes_read", "bytes read from the page source"}, [](T t) { return count(t.bytesRead); }},
-            {{"resident_bytes", "resident page bytes at the frame's end"}, [](T t) { return count(t.residentBytes); }},
-            {{"gpu_resident_bytes", "geometry page bytes in the GPU arena"}, [](T t) { return count(t.gpuResidentBytes); }},
-            {{"in_flight", "requests queued or being read at the frame's end"}, [](T t) { return count(t.inFlight); }},
+            {{"bytes_read", "bytes read from the page source"},
+             [](T t) { return count(t.bytesRead); }},
+            {{"resident_bytes", "resident page bytes at the frame's end"},
+             [](T t) { return count(t.residentBytes); }},
+            {{"gpu_resident_bytes", "geometry page bytes in the GPU arena"},
+             [](T t) { return count(t.gpuResidentBytes); }},
+            {{"in_flight", "requests queued or being read at the frame's end"},
+             [](T t) { return count(t.inFlight); }},
             {{"evicted", "pages evicted"}, [](T t) { return count(t.evicted); }},
-            {{"dropped", "finished reads that did not fit the budget"}, [](T t) { return count(t.dropped); }},
-            {{"nodes_deferred", "cells drawn coarser than the ε rule wanted (debt)"}, [](T t) { return count(t.stats.nodesDeferred); }},
+            {{"dropped", "finished reads that did not fit the budget"},
+             [](T t) { return count(t.dropped); }},
+            {{"nodes_deferred", "cells drawn coarser than the ε rule wanted (debt)"},
+             [](T t) { return count(t.stats.nodesDeferred); }},
             {{"triangles", "triangles drawn"}, [](T t) { return count(t.stats.trianglesDrawn); }},
             {{"cubes", "color cubes drawn"}, [](T t) { return count(t.stats.cubesDrawn); }},
-            {{"stalled", "the frame waited for pages (--sync)"}, [](T t) { return flag(t.stalled); }},
+            {{"stalled", "the frame waited for pages (--sync)"},
+             [](T t) { return flag(t.stalled); }},
             {{"psnr_db", "PSNR (sRGB) against the reference, when measured"},
              [](T t) { return t.psnrDb ? real(*t.psnrDb) : Value{}; }},
             {{"holes", "pixels the reference covers and the frame does not, when measured"},
              [](T t) { return t.holes ? count(*t.holes) : Value{}; }},
-            {{"node_page_bytes", "node page bytes the frame used"}, [](T t) { return count(t.nodePageBytes); }},
-            {{"geometry_page_bytes", "geometry page bytes the frame used"}, [](T t) { return count(t.geometryPageBytes); }},
+            {{"node_page_bytes", "node page bytes the frame used"},
+             [](T t) { return count(t.nodePageBytes); }},
+            {{"geometry_page_bytes", "geometry page bytes the frame used"},
+             [](T t) { return count(t.geometryPageBytes); }},
             // Added by issue 14.
-            {{"pump_ms", "installing finished reads before the frame"}, [](T t) { return real(t.pumpMs); }},
-            {{"prefetch_ms", "the traversal for the camera ahead"}, [](T t) { return real(t.prefetchMs); }},
-            {{"bytes_read_total", "bytes read since the session opened"}, [](T t) { return count(t.bytesReadTotal); }},
+            {{"pump_ms", "installing finished reads before the frame"},
+             [](T t) { return real(t.pumpMs); }},
+            {{"prefetch_ms", "the traversal for the camera ahead"},
+             [](T t) { return real(t.prefetchMs); }},
+            {{"bytes_read_total", "bytes read since the session opened"},
+             [](T t) { return count(t.bytesReadTotal); }},
             {{"cancelled", "queued requests cancelled"}, [](T t) { return count(t.cancelled); }},
-            {{"refused", "requests refused: too many in flight"}, [](T t) { return count(t.refused); }},
-            {{"no_room", "requests not queued: no room in the budget"}, [](T t) { return count(t.noRoom); }},
-            {{"nodes_visited", "node records the traversal read"}, [](T t) { return count(t.stats.nodesVisited); }},
-            {{"nodes_culled", "nodes outside the frustum"}, [](T t) { return count(t.stats.nodesCulled); }},
-            {{"nodes_occluded", "nodes the renderer saw occluded"}, [](T t) { return count(t.stats.nodesOccluded); }},
-            {{"instances_entered", "instances refined into their prototype"}, [](T t) { return count(t.stats.instancesEntered); }},
-            {{"geometry_draws", "geometry draw commands"}, [](T t) { return count(t.stats.geometryDraws); }},
-            {{"pages_uploaded", "geometry pages uploaded to the GPU"}, [](T t) { return count(t.stats.pagesUploaded); }},
-            {{"uploads_refused", "geometry pages over the GPU upload budget"}, [](T t) { return count(t.stats.uploadsRefused); }},
-            {{"pages_missing", "page lookups that found no usable page"}, [](T t) { return count(t.stats.pagesMissing); }},
+            {{"refused", "requests refused: too many in flight"},
+             [](T t) { return count(t.refused); }},
+            {{"no_room", "requests not queued: no room in the budget"},
+             [](T t) { return count(t.noRoom); }},
+            {{"nodes_visited", "node records the traversal read"},
+             [](T t) { return count(t.stats.nodesVisited); }},
+            {{"nodes_culled", "nodes outside the frustum"},
+             [](T t) { return count(t.stats.nodesCulled); }},
+            {{"nodes_occluded", "nodes the renderer saw occluded"},
+             [](T t) { return count(t.stats.nodesOccluded); }},
+            {{"instances_entered", "instances refined into their prototype"},
+             [](T t) { return count(t.stats.instancesEntered); }},
+            {{"geometry_draws", "geometry draw commands"},
+             [](T t) { return count(t.stats.geometryDraws); }},
+            {{"pages_uploaded", "geometry pages uploaded to the GPU"},
+             [](T t) { return count(t.stats.pagesUploaded); }},
+            {{"uploads_refused", "geometry pages over the GPU upload budget"},
+             [](T t) { return count(t.stats.uploadsRefused); }},
+            {{"pages_missing", "page lookups that found no usable page"},
+             [](T t) { return count(t.stats.pagesMissing); }},
     };
     return table;
 }

@@ -1,11 +1,10 @@
-#include <ff/runtime/StreamingSession.h>
-
 #include "CachedPageAccess.h"
 
 #include <ff/cache/PageCache.h>
 #include <ff/cache/ScenePageSource.h>
 #include <ff/runtime/BackToFrontTraversal.h>
 #include <ff/runtime/PageAccess.h>
+#include <ff/runtime/StreamingSession.h>
 
 #include <algorithm>
 #include <chrono>
@@ -18,13 +17,15 @@ namespace ff::runtime {
 namespace {
 
 double millisecondsSince(std::chrono::steady_clock::time_point start) {
-    return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+    return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start)
+            .count();
 }
 
 /** Counts the distinct pages read through the source: the unique bytes a session needed. */
 class CountingSource final : public cache::IPageSource {
 public:
-    explicit CountingSource(std::shared_ptr<cache::IPageSource> inner) : mInner(std::move(inner)) {}
+    explicit CountingSource(std::shared_ptr<cache::IPageSource> inner)
+        : mInner(std::move(inner)) {}
     std::uint32_t pageSize() const override { return mInner->pageSize(); }
     std::uint64_t pageCount() const override { return mInner->pageCount(); }
     Status readPage(std::uint64_t index, std::span<std::byte> out) override {
@@ -49,7 +50,10 @@ private:
 // it no longer wants.
 class FrameBracket {
 public:
-    explicit FrameBracket(IPageAccess& pages) : mPages(pages) { mPages.beginFrame(); }
+    explicit FrameBracket(IPageAccess& pages)
+        : mPages(pages) {
+        mPages.beginFrame();
+    }
     ~FrameBracket() { mPages.endFrame(); }
     FrameBracket(const FrameBracket&) = delete;
     FrameBracket& operator=(const FrameBracket&) = delete;
@@ -80,8 +84,12 @@ struct StreamingSession::Impl {
 
     /** pump → traverse → draw → finish → prefetch, inside one page-access frame. */
     template <typename Finish>
-    Status frame(const FrameContext& context, FrameOutput output, FrameStats& stats, double& prefetchMs,
-                 Finish&& finish);
+    Status
+    frame(const FrameContext& context,
+          FrameOutput output,
+          FrameStats& stats,
+          double& prefetchMs,
+          Finish&& finish);
     /** One frame into `result` (its stats start afresh). */
     Status frameToImage(const FrameContext& context, Frame& result, double& prefetchMs);
     /** A public frame call: pump, then `body` (one frame or, waiting, several), then the
@@ -90,15 +98,21 @@ struct StreamingSession::Impl {
     Status call(const FrameContext& context, FrameStats& stats, Body&& body);
     void prefetch(const FrameContext& context, double& prefetchMs);
     void pump(std::size_t installs, double& pumpMs);
-    void record(const FrameContext& context, const FrameStats& stats, double frameMs, double pumpMs,
-                double prefetchMs, bool stalled);
+    void
+    record(const FrameContext& context,
+           const FrameStats& stats,
+           double frameMs,
+           double pumpMs,
+           double prefetchMs,
+           bool stalled);
 };
 
-StreamingSession::StreamingSession(std::unique_ptr<Impl> impl) : mImpl(std::move(impl)) {}
+StreamingSession::StreamingSession(std::unique_ptr<Impl> impl)
+    : mImpl(std::move(impl)) {}
 StreamingSession::~StreamingSession() = default;
 
-Result<std::unique_ptr<StreamingSession>> StreamingSession::open(
-        const std::filesystem::path& scenePath, const SessionOptions& options) {
+Result<std::unique_ptr<StreamingSession>>
+StreamingSession::open(const std::filesystem::path& scenePath, const SessionOptions& options) {
     auto impl = std::make_unique<Impl>();
     FF_ASSIGN_OR_RETURN(impl->scene, storage::SceneFile::open(scenePath));
     const storage::SceneFile& scene = *impl->scene;
@@ -106,13 +120,17 @@ Result<std::unique_ptr<StreamingSession>> StreamingSession::open(
         impl->pages = std::make_unique<MappedPageAccess>(scene);
     } else {
         const auto rootTooLarge = [&] {
-            return Status(ErrorCode::OutOfBudget, "--cache-mb " + std::to_string(options.cacheBytes >> 20) +
-                                                          " cannot hold the scene's root page (" +
-                                                          std::to_string(scene.pageSize() >> 10) + " KiB)");
+            return Status(
+                    ErrorCode::OutOfBudget,
+                    "--cache-mb " + std::to_string(options.cacheBytes >> 20) +
+                            " cannot hold the scene's root page (" +
+                            std::to_string(scene.pageSize() >> 10) + " KiB)");
         };
         if (options.cacheBytes < scene.pageSize())
             return rootTooLarge();
-        FF_ASSIGN_OR_RETURN(std::unique_ptr<cache::ScenePageSource> source, cache::ScenePageSource::open(scenePath));
+        FF_ASSIGN_OR_RETURN(
+                std::unique_ptr<cache::ScenePageSource> source,
+                cache::ScenePageSource::open(scenePath));
         impl->counting = std::make_shared<CountingSource>(std::move(source));
         cache::PageCacheOptions cacheOptions;
         cacheOptions.budgetBytes = options.cacheBytes;
@@ -126,7 +144,8 @@ Result<std::unique_ptr<StreamingSession>> StreamingSession::open(
         impl->cache->request(rootPage, 1e30f);
         impl->cache->drain();
         if (impl->cache->state(rootPage) == cache::PageState::Failed)
-            return impl->cache->failure(rootPage).value_or(Status(ErrorCode::IoError, "the root page is unreadable"));
+            return impl->cache->failure(rootPage).value_or(
+                    Status(ErrorCode::IoError, "the root page is unreadable"));
         if (impl->cache->state(rootPage) != cache::PageState::Resident)
             return rootTooLarge();
         auto cached = std::make_unique<CachedPageAccess>(*impl->cache, scene.pageSize());
@@ -140,8 +159,12 @@ Result<std::unique_ptr<StreamingSession>> StreamingSession::open(
     return std::unique_ptr<StreamingSession>(new StreamingSession(std::move(impl)));
 }
 
-const storage::SceneFile& StreamingSession::scene() const noexcept { return *mImpl->scene; }
-bool StreamingSession::streams() const noexcept { return mImpl->cache != nullptr; }
+const storage::SceneFile& StreamingSession::scene() const noexcept {
+    return *mImpl->scene;
+}
+bool StreamingSession::streams() const noexcept {
+    return mImpl->cache != nullptr;
+}
 
 void StreamingSession::Impl::pump(std::size_t installs, double& pumpMs) {
     if (!cache)
@@ -168,8 +191,12 @@ void StreamingSession::Impl::prefetch(const FrameContext& context, double& prefe
 }
 
 template <typename Finish>
-Status StreamingSession::Impl::frame(const FrameContext& context, FrameOutput output, FrameStats& stats,
-                                     double& prefetchMs, Finish&& finish) {
+Status StreamingSession::Impl::frame(
+        const FrameContext& context,
+        FrameOutput output,
+        FrameStats& stats,
+        double& prefetchMs,
+        Finish&& finish) {
     const FrameBracket bracket(*pages);
     FF_RETURN_IF_ERROR(renderer->beginFrame(context, output, stats));
     const double drawBefore = stats.drawMs;
@@ -186,7 +213,8 @@ Status StreamingSession::Impl::frame(const FrameContext& context, FrameOutput ou
     return Status::ok();
 }
 
-Status StreamingSession::Impl::frameToImage(const FrameContext& context, Frame& result, double& prefetchMs) {
+Status StreamingSession::Impl::frameToImage(
+        const FrameContext& context, Frame& result, double& prefetchMs) {
     result.stats = {};
     return frame(context, FrameOutput::Image, result.stats, prefetchMs, [&]() -> Status {
         FF_ASSIGN_OR_RETURN(result.image, renderer->finishImage(result.stats));
@@ -207,8 +235,13 @@ Status StreamingSession::Impl::call(const FrameContext& context, FrameStats& sta
     return Status::ok();
 }
 
-void StreamingSession::Impl::record(const FrameContext& context, const FrameStats& stats, double frameMs,
-                                    double pumpMs, double prefetchMs, bool stalled) {
+void StreamingSession::Impl::record(
+        const FrameContext& context,
+        const FrameStats& stats,
+        double frameMs,
+        double pumpMs,
+        double prefetchMs,
+        bool stalled) {
     FrameTelemetry t;
     t.frame = frames++;
     t.timeSeconds = context.timeSeconds;
@@ -253,18 +286,19 @@ Result<Frame> StreamingSession::render(const FrameContext& context) {
 Result<Frame> StreamingSession::renderComplete(const FrameContext& context) {
     Impl& s = *mImpl;
     Frame result;
-    FF_RETURN_IF_ERROR(s.call(context, result.stats, [&](double& prefetchMs, bool& stalled) -> Status {
-        FF_RETURN_IF_ERROR(s.frameToImage(context, result, prefetchMs));
-        while (s.cache && result.stats.nodesDeferred > 0) {
-            const std::uint64_t before = s.cache->stats().completed;
-            s.cache->drain();
-            stalled = true;
-            FF_RETURN_IF_ERROR(s.frameToImage(context, result, prefetchMs));
-            if (s.cache->stats().completed == before)
-                break; // nothing more fits the budget: this frame is as good as it gets
-        }
-        return Status::ok();
-    }));
+    FF_RETURN_IF_ERROR(
+            s.call(context, result.stats, [&](double& prefetchMs, bool& stalled) -> Status {
+                FF_RETURN_IF_ERROR(s.frameToImage(context, result, prefetchMs));
+                while (s.cache && result.stats.nodesDeferred > 0) {
+                    const std::uint64_t before = s.cache->stats().completed;
+                    s.cache->drain();
+                    stalled = true;
+                    FF_RETURN_IF_ERROR(s.frameToImage(context, result, prefetchMs));
+                    if (s.cache->stats().completed == before)
+                        break; // nothing more fits the budget: this frame is as good as it gets
+                }
+                return Status::ok();
+            }));
     return result;
 }
 
@@ -272,12 +306,16 @@ Result<FrameStats> StreamingSession::present(const FrameContext& context) {
     Impl& s = *mImpl;
     FrameStats stats;
     FF_RETURN_IF_ERROR(s.call(context, stats, [&](double& prefetchMs, bool&) {
-        return s.frame(context, FrameOutput::Window, stats, prefetchMs, [&] { return s.renderer->finishPresent(stats); });
+        return s.frame(context, FrameOutput::Window, stats, prefetchMs, [&] {
+            return s.renderer->finishPresent(stats);
+        });
     }));
     return stats;
 }
 
-void StreamingSession::setPrefetchCamera(std::optional<Camera> camera) { mImpl->prefetchCamera = camera; }
+void StreamingSession::setPrefetchCamera(std::optional<Camera> camera) {
+    mImpl->prefetchCamera = camera;
+}
 
 void StreamingSession::setCacheBudget(std::uint64_t bytes) {
     if (mImpl->cache)
@@ -296,7 +334,9 @@ Status StreamingSession::setGpuBudget(std::uint64_t bytes) {
     return Status::ok();
 }
 
-const FrameTelemetry& StreamingSession::lastFrame() const noexcept { return mImpl->last; }
+const FrameTelemetry& StreamingSession::lastFrame() const noexcept {
+    return mImpl->last;
+}
 
 SessionTotals StreamingSession::totals() const {
     const Impl& s = *mImpl;
@@ -319,6 +359,8 @@ SessionTotals StreamingSession::totals() const {
     return t;
 }
 
-const std::vector<Status>& StreamingSession::newFailures() const noexcept { return mImpl->failures; }
+const std::vector<Status>& StreamingSession::newFailures() const noexcept {
+    return mImpl->failures;
+}
 
 } // namespace ff::runtime

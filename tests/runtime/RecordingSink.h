@@ -26,7 +26,8 @@ struct RecordedRun {
 class RecordingSink final : public IDrawSink {
 public:
     /** keep = false counts without keeping (a cut too large to hold). */
-    explicit RecordingSink(bool keep = true) : mKeep(keep) {}
+    explicit RecordingSink(bool keep = true)
+        : mKeep(keep) {}
 
     Status draw(const DrawList& batch, FrameStats&) override {
         ++batches;

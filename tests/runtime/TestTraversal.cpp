@@ -35,7 +35,8 @@ using test::freshDir;
 /** The memory map, except that `pending` pages are not resident yet; records every lookup. */
 class FakePageAccess final : public IPageAccess {
 public:
-    explicit FakePageAccess(const storage::SceneFile& scene) : mMapped(scene) {}
+    explicit FakePageAccess(const storage::SceneFile& scene)
+        : mMapped(scene) {}
     PageLookup lookup(std::uint64_t page, storage::PageType type, float priority) override {
         lookups.push_back({page, type, priority});
         if (pending.contains(page))
@@ -81,7 +82,8 @@ public:
     bool admit(std::uint64_t) override { return false; }
 };
 
-std::unique_ptr<storage::SceneFile> buildGenerated(const fs::path& file, const std::string& generator) {
+std::unique_ptr<storage::SceneFile>
+buildGenerated(const fs::path& file, const std::string& generator) {
     builder::BuildOptions options;
     options.memoryBudgetBytes = builder::SceneBuilder::kMinimumBudgetBytes;
     auto sceneBuilder = builder::SceneBuilder::create(file, options);
@@ -97,7 +99,8 @@ std::unique_ptr<storage::SceneFile> buildGenerated(const fs::path& file, const s
 
 Bounds boundsOf(const storage::SceneFile& scene) {
     const auto& h = scene.header();
-    return {{h.boundsMin[0], h.boundsMin[1], h.boundsMin[2]}, {h.boundsMax[0], h.boundsMax[1], h.boundsMax[2]}};
+    return {{h.boundsMin[0], h.boundsMin[1], h.boundsMin[2]},
+            {h.boundsMax[0], h.boundsMax[1], h.boundsMax[2]}};
 }
 
 FrameContext frameAt(const storage::SceneFile& scene, float distanceRadii, float epsilon) {
@@ -114,13 +117,19 @@ struct Walk {
     Status status;
 };
 
-Walk walk(const storage::SceneFile& scene, IPageAccess& pages, const FrameContext& frame,
-          IVisibility* visibility = nullptr, IUploadGate* gate = nullptr, bool keep = true) {
+Walk walk(
+        const storage::SceneFile& scene,
+        IPageAccess& pages,
+        const FrameContext& frame,
+        IVisibility* visibility = nullptr,
+        IUploadGate* gate = nullptr,
+        bool keep = true) {
     BackToFrontTraversal traversal(scene, pages);
     NoVisibility none;
     AdmitAll admitAll;
     Walk w{test::RecordingSink(keep), {}, Status::ok()};
-    w.status = traversal.traverse(frame, {w.sink, visibility ? *visibility : none, gate ? *gate : admitAll}, w.stats);
+    w.status = traversal.traverse(
+            frame, {w.sink, visibility ? *visibility : none, gate ? *gate : admitAll}, w.stats);
     return w;
 }
 
@@ -151,9 +160,11 @@ TEST_F(SphereTraversalTest, MissingPagesDeferToTheCellsCubesAndAreAskedFor) {
     const Walk w = walk(*mScene, pages, frameAt(*mScene, 2.0f, 1.0f));
     ASSERT_TRUE(w.status.isOk()) << w.status.toString();
     EXPECT_GT(w.stats.nodesDeferred, 0u);
-    EXPECT_EQ(w.sink.cubes.size(), w.stats.nodesDeferred) << "each deferred cell stands in with its cube";
+    EXPECT_EQ(w.sink.cubes.size(), w.stats.nodesDeferred)
+            << "each deferred cell stands in with its cube";
     for (const test::RecordedRun& r : w.sink.runs)
-        EXPECT_FALSE(pages.pending.contains(r.run.page)) << "drawn from a page that is not resident";
+        EXPECT_FALSE(pages.pending.contains(r.run.page))
+                << "drawn from a page that is not resident";
     EXPECT_GT(pages.topPendingPriority(), 0.0f);
 
     pages.pending.clear();
@@ -212,11 +223,14 @@ TEST_F(SphereTraversalTest, RefusedUploadsDrawCubesInsteadOfTriangles) {
 }
 
 /** Triangles per (page, first triangle) and transform: what was drawn, however it was merged. */
-std::map<std::tuple<std::uint64_t, std::uint32_t, float>, std::uint64_t> trianglesDrawn(const test::RecordingSink& s) {
+std::map<std::tuple<std::uint64_t, std::uint32_t, float>, std::uint64_t>
+trianglesDrawn(const test::RecordingSink& s) {
     std::map<std::tuple<std::uint64_t, std::uint32_t, float>, std::uint64_t> out;
     for (const test::RecordedRun& r : s.runs)
         for (std::uint32_t t = 0; t < r.run.triangleCount; ++t)
-            ++out[{r.run.page, r.run.firstTriangle + t, r.transform[3][0] + 3.0f * r.transform[0][0]}];
+            ++out[{r.run.page,
+                   r.run.firstTriangle + t,
+                   r.transform[3][0] + 3.0f * r.transform[0][0]}];
     return out;
 }
 
@@ -237,7 +251,9 @@ TEST_F(SphereTraversalTest, BoundedBatchesDrawWhatOneBatchDrawsInTheSameOrder) {
     ASSERT_TRUE(many.status.isOk());
     EXPECT_GT(many.sink.batches, 10u);
     EXPECT_FALSE(many.sink.geometryAfterCubes);
-    EXPECT_LE(many.sink.maxBatchBytes, 1024u + sizeof(CubeDraw) + sizeof(glm::mat4) + sizeof(glm::vec3));
+    EXPECT_LE(
+            many.sink.maxBatchBytes,
+            1024u + sizeof(CubeDraw) + sizeof(glm::mat4) + sizeof(glm::vec3));
     EXPECT_EQ(trianglesDrawn(many.sink), trianglesDrawn(one.sink));
     ASSERT_EQ(many.sink.cubes.size(), one.sink.cubes.size());
     for (std::size_t i = 0; i < one.sink.cubes.size(); ++i) {
@@ -264,7 +280,8 @@ storage::NodeRecord unitCell(float lo, float hi) {
 }
 
 std::array<float, 3> octantMin(int o) {
-    return {0.5f * static_cast<float>(o & 1), 0.5f * static_cast<float>((o >> 1) & 1),
+    return {0.5f * static_cast<float>(o & 1),
+            0.5f * static_cast<float>((o >> 1) & 1),
             0.5f * static_cast<float>((o >> 2) & 1)};
 }
 
@@ -320,8 +337,10 @@ std::unique_ptr<storage::SceneFile> writeRecursiveScene(const fs::path& path, in
         prototypes.push_back(prototype);
     }
     std::vector<storage::SectionEntry> sections;
-    auto protos = w.appendSection(storage::SectionType::Prototypes, bytesOf(prototypes), prototypes.size());
-    auto insts = w.appendSection(storage::SectionType::Instances, bytesOf(instances), instances.size());
+    auto protos = w.appendSection(
+            storage::SectionType::Prototypes, bytesOf(prototypes), prototypes.size());
+    auto insts =
+            w.appendSection(storage::SectionType::Instances, bytesOf(instances), instances.size());
     EXPECT_TRUE(protos.isOk() && insts.isOk());
     sections = {*protos, *insts};
     storage::SectionEntry hierarchy{};
@@ -362,7 +381,9 @@ TEST(SyntheticCutTest, RecursiveInstancingDrawsEveryLeafInBackToFrontOrder) {
     EXPECT_EQ(one.stats.instancesEntered, 8u + 64u);
     // Back to front: the camera looks along -Z from z = 3, so the first cube lies in the far
     // (z = 0) corner layer and the last in the near one.
-    const auto worldZ = [](const test::RecordedCube& c) { return glm::vec3(c.transform * glm::vec4(c.cube.boxMin, 1.0f)).z; };
+    const auto worldZ = [](const test::RecordedCube& c) {
+        return glm::vec3(c.transform * glm::vec4(c.cube.boxMin, 1.0f)).z;
+    };
     EXPECT_LT(worldZ(one.sink.cubes.front()), 0.25f);
     EXPECT_GE(worldZ(one.sink.cubes.back()), 0.75f);
 

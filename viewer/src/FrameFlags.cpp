@@ -4,8 +4,8 @@
 
 namespace ff::viewer {
 
-const char* const kEpsilonHelp =
-        "A cell whose box covers less than epsilon^2 pixels on screen is drawn as its color cube (0: all geometry)";
+const char* const kEpsilonHelp = "A cell whose box covers less than epsilon^2 pixels on screen is "
+                                 "drawn as its color cube (0: all geometry)";
 
 CLI::Option* addEpsilonOption(CLI::App& cmd, float& epsilon) {
     return cmd.add_option("--epsilon", epsilon, kEpsilonHelp)->capture_default_str();
@@ -13,38 +13,53 @@ CLI::Option* addEpsilonOption(CLI::App& cmd, float& epsilon) {
 
 CLI::Option* addMethodOption(CLI::App& cmd, std::string& method) {
     // Checked by the verb, which names the flag in its own error.
-    return cmd.add_option("--method", method, "hierarchical or full (every triangle, no hierarchy)")
+    return cmd
+            .add_option("--method", method, "hierarchical or full (every triangle, no hierarchy)")
             ->capture_default_str();
 }
 
 CLI::Option* addCubeDrawOption(CLI::App& cmd, std::string& cubeDraw) {
-    return cmd.add_option("--cube-draw", cubeDraw,
-                          "Color cubes as faces, points (one area-weighted point per cube) or auto (points when "
-                          "epsilon <= 2)")
+    return cmd
+            .add_option(
+                    "--cube-draw",
+                    cubeDraw,
+                    "Color cubes as faces, points (one area-weighted point per cube) or auto "
+                    "(points when "
+                    "epsilon <= 2)")
             ->check(CLI::IsMember(runtime::cubeStyleNames()))
             ->capture_default_str();
 }
 
 CLI::Option* addCubeAnisotropyOption(CLI::App& cmd, float& anisotropy) {
-    return cmd.add_option("--cube-anisotropy", anisotropy,
-                          "Refuse colour cubes whose coverage differs more than this between axes (0..1; 1 = never)")
+    return cmd
+            .add_option(
+                    "--cube-anisotropy",
+                    anisotropy,
+                    "Refuse colour cubes whose coverage differs more than this between axes (0..1; "
+                    "1 = never)")
             ->check(CLI::Range(0.0f, 1.0f))
             ->capture_default_str();
 }
 
 CLI::Option* addGpuBudgetOption(CLI::App& cmd, std::string& gpuBudget) {
-    return cmd.add_option("--gpu-budget", gpuBudget, "GPU memory for geometry pages")->capture_default_str();
+    return cmd.add_option("--gpu-budget", gpuBudget, "GPU memory for geometry pages")
+            ->capture_default_str();
 }
 
 CLI::Option* addGpuUploadsOption(CLI::App& cmd, std::uint32_t& uploads) {
-    return cmd.add_option("--gpu-uploads-per-frame", uploads,
-                          "Geometry pages uploaded to the GPU per frame at most; cells over it are drawn as cubes "
-                          "this frame (0: no bound)")
+    return cmd
+            .add_option(
+                    "--gpu-uploads-per-frame",
+                    uploads,
+                    "Geometry pages uploaded to the GPU per frame at most; cells over it are drawn "
+                    "as cubes "
+                    "this frame (0: no bound)")
             ->capture_default_str();
 }
 
 CLI::Option* addBackgroundOption(CLI::App& cmd, std::string& background) {
-    return cmd.add_option("--background", background, "Background colour, linear r,g,b")->capture_default_str();
+    return cmd.add_option("--background", background, "Background colour, linear r,g,b")
+            ->capture_default_str();
 }
 
 } // namespace ff::viewer

@@ -1,6 +1,6 @@
-#include <ff/runtime/GlProgram.h>
-
 #include "GlHeaders.h"
+
+#include <ff/runtime/GlProgram.h>
 
 #include <string>
 
@@ -28,7 +28,8 @@ Result<GLuint> compileShader(GLenum type, std::initializer_list<const char*> sou
 
 } // namespace
 
-Result<std::uint32_t> linkGlProgram(std::initializer_list<const char*> vertexSources, const char* fragmentSource) {
+Result<std::uint32_t>
+linkGlProgram(std::initializer_list<const char*> vertexSources, const char* fragmentSource) {
     FF_ASSIGN_OR_RETURN(const GLuint vs, compileShader(GL_VERTEX_SHADER, vertexSources));
     Result<GLuint> compiledFs = compileShader(GL_FRAGMENT_SHADER, {fragmentSource});
     if (!compiledFs) {

@@ -2,8 +2,8 @@
 
 #include <ff/runtime/Frustum.h>
 #include <ff/runtime/PageAccess.h>
-#include <ff/runtime/Traversal.h>
 #include <ff/runtime/TransformMetric.h>
+#include <ff/runtime/Traversal.h>
 #include <ff/storage/SceneFile.h>
 
 #include <cstdint>
@@ -38,8 +38,11 @@ class BackToFrontTraversal final : public ITraversal {
 public:
     BackToFrontTraversal(const storage::SceneFile& scene, IPageAccess& pages);
 
-    [[nodiscard]] Status traverse(const FrameContext& frame, TraversalServices services, FrameStats& stats) override;
-    [[nodiscard]] const std::vector<Status>& newFailures() const noexcept override { return mNewFailures; }
+    [[nodiscard]] Status
+    traverse(const FrameContext& frame, TraversalServices services, FrameStats& stats) override;
+    [[nodiscard]] const std::vector<Status>& newFailures() const noexcept override {
+        return mNewFailures;
+    }
 
     /** Bytes the walk's own scratch holds now (its batch, stacks and per-prototype runs). */
     [[nodiscard]] std::size_t scratchBytes() const noexcept;
@@ -69,13 +72,19 @@ private:
     enum class Fetch { Ready, Missing };
 
     Status walk(Pass pass, FrameStats& stats);
-    void visit(const storage::NodeRecord& node, storage::NodeRef ref, std::size_t active, int depth);
+    void
+    visit(const storage::NodeRecord& node, storage::NodeRef ref, std::size_t active, int depth);
     /** Looks a page up; Failed pages are reported once and read as Missing. */
-    Fetch fetch(std::uint64_t page, storage::PageType type, float priority, std::span<const std::byte>& payload);
+    Fetch
+    fetch(std::uint64_t page,
+          storage::PageType type,
+          float priority,
+          std::span<const std::byte>& payload);
     Fetch readNode(storage::NodeRef ref, float priority, storage::NodeRecord& out);
     /** Fills mSegments with the node's own geometry runs if every page is Ready and admitted. */
     Fetch collectGeometry(const storage::NodeRecord& node, float priority);
-    void emitGeometry(const storage::GeometrySegment& segment, const std::byte* payload, std::size_t active);
+    void emitGeometry(
+            const storage::GeometrySegment& segment, const std::byte* payload, std::size_t active);
     void emitCube(const storage::NodeRecord& node, storage::NodeRef ref, std::size_t active);
     void defer(const storage::NodeRecord& node, storage::NodeRef ref, std::size_t active);
     void pushActive(const glm::mat4& transform, std::uint64_t instancePath);
@@ -97,8 +106,8 @@ private:
     TraversalServices* mServices = nullptr;
     FrameStats* mStats = nullptr;
     Pass mPass = Pass::Everything;
-    bool mSpilled = false;  ///< the Everything pass overflowed its batch: cubes need their own pass
-    Status mSinkStatus;     ///< the first error the sink reported this frame
+    bool mSpilled = false; ///< the Everything pass overflowed its batch: cubes need their own pass
+    Status mSinkStatus;    ///< the first error the sink reported this frame
     float mPixelScale = 1.0f;
     glm::mat4 mViewProjection{1.0f};
     DrawList mList;

@@ -15,7 +15,7 @@ namespace ff::runtime {
  * several strings, `fragmentSource` is one. Returns the program's name (a GLuint). Needs a
  * current GL context. Errors: Internal with the compile or link log.
  */
-[[nodiscard]] Result<std::uint32_t> linkGlProgram(std::initializer_list<const char*> vertexSources,
-                                                  const char* fragmentSource);
+[[nodiscard]] Result<std::uint32_t>
+linkGlProgram(std::initializer_list<const char*> vertexSources, const char* fragmentSource);
 
 } // namespace ff::runtime

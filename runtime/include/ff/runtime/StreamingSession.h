@@ -81,8 +81,8 @@ public:
      * file's, OutOfBudget when the budget cannot hold the root page (the message names
      * --cache-mb), and the renderer's.
      */
-    [[nodiscard]] static Result<std::unique_ptr<StreamingSession>> open(
-            const std::filesystem::path& scenePath, const SessionOptions& options = {});
+    [[nodiscard]] static Result<std::unique_ptr<StreamingSession>>
+    open(const std::filesystem::path& scenePath, const SessionOptions& options = {});
     ~StreamingSession();
     StreamingSession(const StreamingSession&) = delete;
     StreamingSession& operator=(const StreamingSession&) = delete;

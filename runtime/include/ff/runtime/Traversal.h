@@ -57,13 +57,19 @@ public:
     [[nodiscard]] virtual Visibility visibility(const NodeKey& key) const = 0;
     /** Asks for `key`'s box (in the frame of `batch.transforms[transform]` of the batch now
      *  being filled) to be tested against what is drawn this frame. */
-    virtual void test(const NodeKey& key, const glm::vec3& boxMin, const glm::vec3& boxMax, std::uint32_t transform) = 0;
+    virtual void
+    test(const NodeKey& key,
+         const glm::vec3& boxMin,
+         const glm::vec3& boxMax,
+         std::uint32_t transform) = 0;
 };
 
 /** Knows nothing: every node is Unknown (drawn), tests are dropped. */
 class NoVisibility final : public IVisibility {
 public:
-    [[nodiscard]] Visibility visibility(const NodeKey&) const override { return Visibility::Unknown; }
+    [[nodiscard]] Visibility visibility(const NodeKey&) const override {
+        return Visibility::Unknown;
+    }
     void test(const NodeKey&, const glm::vec3&, const glm::vec3&, std::uint32_t) override {}
 };
 
@@ -117,7 +123,8 @@ public:
     /** Hands the frame's draw list to `services.sink` in batches and fills the selection
      *  counters of `stats`. Errors only for what leaves nothing to draw (the root page failed)
      *  and for what the sink reports. */
-    [[nodiscard]] virtual Status traverse(const FrameContext& frame, TraversalServices services, FrameStats& stats) = 0;
+    [[nodiscard]] virtual Status
+    traverse(const FrameContext& frame, TraversalServices services, FrameStats& stats) = 0;
     /** Page failures first met during the last traverse() (each is reported once). */
     [[nodiscard]] virtual const std::vector<Status>& newFailures() const noexcept = 0;
 };
