@@ -322,10 +322,6 @@ void StreamingSession::setCacheBudget(std::uint64_t bytes) {
         mImpl->cache->setBudget(std::max<std::uint64_t>(bytes, mImpl->scene->pageSize()));
 }
 
-std::uint64_t StreamingSession::cacheBudget() const noexcept {
-    return mImpl->cache ? mImpl->cache->budgetBytes() : 0;
-}
-
 Status StreamingSession::setGpuBudget(std::uint64_t bytes) {
     Impl& s = *mImpl;
     s.renderer.reset(); // frees the old page arena before the new one is allocated
@@ -351,7 +347,6 @@ SessionTotals StreamingSession::totals() const {
     t.noRoom = c.noRoom;
     t.evicted = c.evicted;
     t.dropped = c.dropped;
-    t.completed = c.completed;
     t.bytesRead = c.bytesRead;
     t.uniqueBytes = s.counting->uniquePages() * s.scene->pageSize();
     t.peakResidentBytes = s.peakResidentBytes;

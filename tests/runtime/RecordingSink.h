@@ -49,8 +49,6 @@ public:
         return Status::ok();
     }
 
-    void reset() { *this = RecordingSink(mKeep); }
-
     std::vector<RecordedCube> cubes;
     std::vector<RecordedRun> runs;
     std::size_t batches = 0;

@@ -61,7 +61,6 @@ struct SessionTotals {
     std::uint64_t noRoom = 0;
     std::uint64_t evicted = 0;
     std::uint64_t dropped = 0;
-    std::uint64_t completed = 0;
     std::uint64_t bytesRead = 0;
     /** Distinct pages read at least once, in bytes: what the frames needed. */
     std::uint64_t uniqueBytes = 0;
@@ -107,7 +106,6 @@ public:
     void setPrefetchCamera(std::optional<Camera> camera);
     /** Changes the cache's budget (at least one page); no-op without a cache. */
     void setCacheBudget(std::uint64_t bytes);
-    std::uint64_t cacheBudget() const noexcept;
     /** Replaces the renderer with one of `bytes` of GPU page arena (the old arena is freed
      *  first). Errors: the renderer's. */
     [[nodiscard]] Status setGpuBudget(std::uint64_t bytes);
