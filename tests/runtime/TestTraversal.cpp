@@ -16,6 +16,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cstring>
 #include <filesystem>
 #include <map>
@@ -413,6 +414,11 @@ TEST(SyntheticCutTest, ACutOfSeventeenMillionCubesTakesUnder64MiB) {
     ASSERT_TRUE(traversal.traverse(frame, {sink, none, admitAll}, stats).isOk());
     const std::uint64_t anonAfter = storage::readProcessMemory().anonBytes;
 
+    // What was measured, in the test's XML report (--gtest_output=xml).
+    RecordProperty("scratch_bytes", std::to_string(traversal.scratchBytes()));
+    RecordProperty("max_batch_bytes", std::to_string(sink.maxBatchBytes));
+    RecordProperty("anon_growth_bytes", std::to_string(anonAfter - std::min(anonAfter, anonBefore)));
+    RecordProperty("batches", std::to_string(sink.batches));
     constexpr std::uint64_t kCut = 1u << 24; // 8^8
     EXPECT_EQ(stats.cubesDrawn, kCut);
     EXPECT_EQ(sink.cubeCount, kCut);
