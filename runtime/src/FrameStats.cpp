@@ -19,7 +19,10 @@ std::string FrameStats::toJson() const {
             {"nodes_deferred", nodesDeferred},
             {"pages_missing", pagesMissing},
             {"uploads_refused", uploadsRefused},
+            {"occlusion_queries", occlusionQueries},
+            {"queries_waited", queriesWaited},
             {"select_ms", selectMs},
+            {"occlusion_ms", occlusionMs},
             {"draw_ms", drawMs},
             {"total_ms", totalMs},
     };

@@ -104,6 +104,14 @@ const std::vector<Column>& columns() {
              [](T t) { return count(t.stats.uploadsRefused); }},
             {{"pages_missing", "page lookups that found no usable page"},
              [](T t) { return count(t.stats.pagesMissing); }},
+            {{"occlusion_ms", "issuing occlusion tests and reading their answers"},
+             [](T t) { return real(t.stats.occlusionMs); }},
+            {{"occlusion_queries", "occlusion tests issued (a multiquery once)"},
+             [](T t) { return count(t.stats.occlusionQueries); }},
+            {{"queries_waited", "occlusion answers the traversal waited for"},
+             [](T t) { return count(t.stats.queriesWaited); }},
+            {{"render_rate", "triangles drawn, % of the scene's (instances counted)"},
+             [](T t) { return real(t.renderRatePercent); }},
     };
     return table;
 }

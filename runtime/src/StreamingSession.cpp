@@ -3,6 +3,7 @@
 #include <ff/cache/PageCache.h>
 #include <ff/cache/ScenePageSource.h>
 #include <ff/runtime/BackToFrontTraversal.h>
+#include <ff/runtime/OcclusionTraversal.h>
 #include <ff/runtime/PageAccess.h>
 #include <ff/runtime/StreamingSession.h>
 
@@ -71,6 +72,7 @@ struct StreamingSession::Impl {
     std::unique_ptr<IPageAccess> pages;
     CachedPageAccess* cachedPages = nullptr; ///< pages, when streaming
     std::unique_ptr<BackToFrontTraversal> traversal;
+    std::unique_ptr<OcclusionTraversal> occlusionTraversal;
     std::unique_ptr<BackToFrontTraversal> prefetchTraversal; ///< its own failures and scratch
     std::unique_ptr<Renderer> renderer;
     RendererOptions rendererOptions;
@@ -153,6 +155,7 @@ StreamingSession::open(const std::filesystem::path& scenePath, const SessionOpti
         impl->pages = std::move(cached);
     }
     impl->traversal = std::make_unique<BackToFrontTraversal>(scene, *impl->pages);
+    impl->occlusionTraversal = std::make_unique<OcclusionTraversal>(scene, *impl->pages);
     impl->prefetchTraversal = std::make_unique<BackToFrontTraversal>(scene, *impl->pages);
     impl->rendererOptions = options.renderer;
     FF_ASSIGN_OR_RETURN(impl->renderer, Renderer::create(scene, options.renderer));
@@ -186,7 +189,11 @@ void StreamingSession::Impl::prefetch(const FrameContext& context, double& prefe
     AdmitAll admitAll;
     FrameStats ignored;
     // Its only effect is the page requests its lookups make; what it would draw is dropped.
-    (void)prefetchTraversal->traverse(ahead, {discard, visibility, admitAll}, ignored);
+    // With occlusion culling, what the last tests found hidden is not fetched ahead either.
+    const IVisibility& known = context.occlusion.enabled
+                                       ? occlusionTraversal->history()
+                                       : static_cast<const IVisibility&>(visibility);
+    (void)prefetchTraversal->traverse(ahead, {discard, known, admitAll}, ignored);
     prefetchMs += millisecondsSince(start);
 }
 
@@ -201,15 +208,20 @@ Status StreamingSession::Impl::frame(
     FF_RETURN_IF_ERROR(renderer->beginFrame(context, output, stats));
     const double drawBefore = stats.drawMs;
     const auto start = std::chrono::steady_clock::now();
-    const Status walked = traversal->traverse(context, {*renderer, visibility, *renderer}, stats);
-    const auto& fresh = traversal->newFailures();
+    const bool culls =
+            context.occlusion.enabled && context.selection.method == Method::Hierarchical;
+    ITraversal& walker = culls ? static_cast<ITraversal&>(*occlusionTraversal) : *traversal;
+    const Status walked =
+            walker.traverse(context, {*renderer, visibility, *renderer, renderer.get()}, stats);
+    const auto& fresh = walker.newFailures();
     failures.insert(failures.end(), fresh.begin(), fresh.end());
     FF_RETURN_IF_ERROR(walked);
-    // The batches the renderer drew during the walk are draw time, not selection.
-    stats.selectMs = millisecondsSince(start) - (stats.drawMs - drawBefore);
+    // The batches the renderer drew during the walk are draw time, and the occlusion tests
+    // their own, not selection.
+    stats.selectMs = millisecondsSince(start) - (stats.drawMs - drawBefore) - stats.occlusionMs;
     FF_RETURN_IF_ERROR(finish());
     prefetch(context, prefetchMs);
-    stats.totalMs = stats.selectMs + stats.drawMs;
+    stats.totalMs = stats.selectMs + stats.occlusionMs + stats.drawMs;
     return Status::ok();
 }
 
@@ -250,6 +262,9 @@ void StreamingSession::Impl::record(
     t.prefetchMs = prefetchMs;
     t.stats = stats;
     t.stalled = stalled;
+    if (const std::uint64_t total = scene->header().instancedTriangles; total > 0)
+        t.renderRatePercent =
+                100.0 * static_cast<double>(stats.trianglesDrawn) / static_cast<double>(total);
     t.gpuResidentBytes = renderer->residentBytes();
     if (cache) {
         const cache::PageCacheStats& now = cache->stats();

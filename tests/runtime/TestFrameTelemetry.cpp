@@ -54,7 +54,12 @@ const std::vector<std::string> kPinnedColumns = {
         "geometry_draws",
         "pages_uploaded",
         "uploads_refused",
-        "pages_missing"};
+        "pages_missing",
+        // Added by issue 15.
+        "occlusion_ms",
+        "occlusion_queries",
+        "queries_waited",
+        "render_rate"};
 
 TEST(FrameTelemetryTest, ColumnsAreThePinnedOnesInOrder) {
     EXPECT_EQ(telemetryColumnNames(), kPinnedColumns);

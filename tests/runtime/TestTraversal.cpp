@@ -74,7 +74,6 @@ public:
                 return Visibility::Occluded;
         return Visibility::Visible;
     }
-    void test(const NodeKey&, const glm::vec3&, const glm::vec3&, std::uint32_t) override {}
     std::vector<NodeKey> occluded;
 };
 

@@ -62,4 +62,20 @@ CLI::Option* addBackgroundOption(CLI::App& cmd, std::string& background) {
             ->capture_default_str();
 }
 
+void addOcclusionOptions(CLI::App& cmd, runtime::OcclusionOptions& occlusion) {
+    cmd.add_option_function<std::string>(
+               "--occlusion",
+               [&occlusion](const std::string& mode) { occlusion.enabled = mode == "on"; },
+               "Occlusion culling: test boxes against what is drawn, front to back, before "
+               "drawing what they hold (on) or not (off)")
+            ->check(CLI::IsMember({"off", "on"}))
+            ->default_str(occlusion.enabled ? "on" : "off");
+    cmd.add_option(
+               "--occlusion-queries",
+               occlusion.queryBudget,
+               "Occlusion tests a frame may issue at most (past it, untested nodes are drawn)")
+            ->check(CLI::PositiveNumber)
+            ->capture_default_str();
+}
+
 } // namespace ff::viewer

@@ -3,6 +3,8 @@
 // The flags several verbs share (render, replay, view, stats), each defined once: the same name,
 // help text, default display and check everywhere.
 
+#include <ff/runtime/FrameContext.h>
+
 #include <CLI/CLI.hpp>
 
 #include <cstdint>
@@ -19,5 +21,8 @@ CLI::Option* addCubeAnisotropyOption(CLI::App& cmd, float& anisotropy);
 CLI::Option* addGpuBudgetOption(CLI::App& cmd, std::string& gpuBudget);
 CLI::Option* addGpuUploadsOption(CLI::App& cmd, std::uint32_t& uploads);
 CLI::Option* addBackgroundOption(CLI::App& cmd, std::string& background);
+
+/** --occlusion off|on and --occlusion-queries N, straight into the frame's options. */
+void addOcclusionOptions(CLI::App& cmd, runtime::OcclusionOptions& occlusion);
 
 } // namespace ff::viewer

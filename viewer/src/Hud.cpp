@@ -84,6 +84,18 @@ std::string formatHud(const HudInfo& info) {
     text += line;
     text += "triangles " + withThousands(info.trianglesDrawn) + "  cubes " +
             withThousands(info.cubesDrawn) + "  deferred " + withThousands(info.debt) + "\n";
+    if (info.occlusion) {
+        std::snprintf(
+                line,
+                sizeof(line),
+                "occlusion %.1f ms  queries %llu (waited %llu)  occluded %llu  render rate %.2f %%\n",
+                info.occlusionMs,
+                static_cast<unsigned long long>(info.occlusionQueries),
+                static_cast<unsigned long long>(info.queriesWaited),
+                static_cast<unsigned long long>(info.nodesOccluded),
+                info.renderRatePercent);
+        text += line;
+    }
     std::snprintf(
             line,
             sizeof(line),

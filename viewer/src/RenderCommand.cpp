@@ -33,6 +33,7 @@ struct RenderArgs {
     std::string background = "0.70,0.75,0.83";
     std::string gpuBudget = "512MiB";
     bool coverage = false;
+    runtime::OcclusionOptions occlusion;
     runtime::CameraOptions camera;
 };
 
@@ -85,6 +86,7 @@ int runRender(const RenderArgs& args) {
     frameContext.selection.cubeStyle =
             runtime::parseCubeStyle(args.cubeDraw).value_or(runtime::CubeStyle::Auto); // checked by CLI11
     frameContext.selection.maxCubeAnisotropy = args.cubeAnisotropy;
+    frameContext.occlusion = args.occlusion;
     nlohmann::json frames = nlohmann::json::array();
     Result<runtime::Frame> frame = Status(ErrorCode::Internal, "no frame rendered");
     std::vector<Status> failures;
@@ -107,6 +109,7 @@ int runRender(const RenderArgs& args) {
         const nlohmann::json out = {{"scene", args.scene},
                                     {"method", args.method},
                                     {"epsilon", args.epsilon},
+                                    {"occlusion", args.occlusion.enabled},
                                     {"width", size->x},
                                     {"height", size->y},
                                     {"supersample", args.supersample},
@@ -133,6 +136,7 @@ CommandRunner addRenderCommand(CLI::App& app) {
     addMethodOption(*cmd, args->method);
     addCubeDrawOption(*cmd, args->cubeDraw);
     addCubeAnisotropyOption(*cmd, args->cubeAnisotropy);
+    addOcclusionOptions(*cmd, args->occlusion);
     cmd->add_option("--supersample", args->supersample, "Render NxN samples per pixel (a reference)")->capture_default_str();
     cmd->add_option("--frames", args->frames, "Render the view this many times (timing; first frame uploads)")->capture_default_str();
     cmd->add_option("--stats", args->stats, "Write the per-frame statistics as JSON here (also printed on stdout)");

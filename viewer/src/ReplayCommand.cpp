@@ -46,6 +46,7 @@ struct ReplayArgs {
     std::size_t uploadsPerFrame = 64;
     std::uint32_t gpuUploadsPerFrame = 0;
     int prefetchFrames = 4;
+    runtime::OcclusionOptions occlusion;
     std::string csv;
     std::string json;
     std::string summary;
@@ -120,6 +121,7 @@ int runReplay(const ReplayArgs& args) {
     frameContext.height = size->y;
     frameContext.selection.epsilonPixels = args.epsilon;
     frameContext.selection.maxCubeAnisotropy = args.cubeAnisotropy;
+    frameContext.occlusion = args.occlusion;
     frameContext.budgets.pageInstallsPerFrame = args.uploadsPerFrame;
     frameContext.budgets.gpuUploadsPerFrame = args.sync ? 0 : args.gpuUploadsPerFrame;
     const runtime::Bounds bounds = runtime::sceneBounds(scene);
@@ -296,6 +298,7 @@ CommandRunner addReplayCommand(CLI::App& app) {
     cmd->add_option("--size", args->size, "Image size WIDTHxHEIGHT")->capture_default_str();
     addEpsilonOption(*cmd, args->epsilon);
     addCubeAnisotropyOption(*cmd, args->cubeAnisotropy);
+    addOcclusionOptions(*cmd, args->occlusion);
     cmd->add_option("--io-threads", args->ioThreads, "Background read threads")->capture_default_str();
     cmd->add_option("--uploads-per-frame", args->uploadsPerFrame, "Finished reads installed per frame at most (also the reads under way at most, if above 64)")
             ->capture_default_str();

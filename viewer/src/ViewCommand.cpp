@@ -37,6 +37,7 @@ struct ViewArgs {
     std::uint64_t cacheMb = 0;
     std::size_t uploadsPerFrame = 64;
     std::uint32_t gpuUploadsPerFrame = 0;
+    runtime::OcclusionOptions occlusion;
     std::string background = "0.70,0.75,0.83";
     int frames = 0;
     std::string screenshot;
@@ -265,6 +266,7 @@ int runView(const ViewArgs& args) {
         frameContext.timeSeconds = std::chrono::duration<double>(now - start).count();
         frameContext.selection.method = controls.method;
         frameContext.selection.epsilonPixels = controls.epsilonPixels;
+        frameContext.occlusion = args.occlusion;
         frameContext.budgets.pageInstallsPerFrame = args.uploadsPerFrame;
         frameContext.budgets.gpuUploadsPerFrame = args.gpuUploadsPerFrame;
         const runtime::Camera& camera = frameContext.camera;
@@ -315,6 +317,12 @@ int runView(const ViewArgs& args) {
             hudInfo.trianglesDrawn = stats->trianglesDrawn;
             hudInfo.cubesDrawn = stats->cubesDrawn;
             hudInfo.debt = stats->nodesDeferred;
+            hudInfo.occlusion = args.occlusion.enabled;
+            hudInfo.occlusionMs = stats->occlusionMs;
+            hudInfo.occlusionQueries = stats->occlusionQueries;
+            hudInfo.queriesWaited = stats->queriesWaited;
+            hudInfo.nodesOccluded = stats->nodesOccluded;
+            hudInfo.renderRatePercent = streaming.lastFrame().renderRatePercent;
             const runtime::FrameTelemetry& telemetry = streaming.lastFrame();
             hudInfo.residentBytes = streaming.streams() ? telemetry.residentBytes : telemetry.gpuResidentBytes;
             hudInfo.budgetBytes = controls.adjustableBudget();
@@ -354,6 +362,7 @@ CommandRunner addViewCommand(CLI::App& app) {
     cmd->add_option("--uploads-per-frame", args->uploadsPerFrame, "Finished page reads installed per frame at most")
             ->capture_default_str();
     addGpuUploadsOption(*cmd, args->gpuUploadsPerFrame);
+    addOcclusionOptions(*cmd, args->occlusion);
     addGpuBudgetOption(*cmd, args->gpuBudget);
     addBackgroundOption(*cmd, args->background);
     cmd->add_option(

@@ -61,6 +61,12 @@ struct HudInfo {
     std::uint64_t trianglesDrawn = 0;
     std::uint64_t cubesDrawn = 0;
     std::uint64_t debt = 0;             ///< nodes deferred (drawn coarser: pages not resident)
+    bool occlusion = false;             ///< --occlusion on: the line below is shown
+    double occlusionMs = 0.0;           ///< occlusion tests of the last frame
+    std::uint64_t occlusionQueries = 0;
+    std::uint64_t queriesWaited = 0;
+    std::uint64_t nodesOccluded = 0;
+    double renderRatePercent = 0.0; ///< triangles drawn, % of the scene's
     std::uint64_t residentBytes = 0;    ///< GPU page arena now (later: the cache's resident bytes)
     std::uint64_t budgetBytes = 0;      ///< the budget `-`/`=` change
     const char* budgetName = "gpu";     ///< "gpu" or "cache"

@@ -1,6 +1,7 @@
 #include <ff/runtime/Renderer.h>
 
 #include "GlHeaders.h"
+#include "OcclusionQueries.h"
 #include "Shaders.h"
 
 #include <ff/runtime/GlProgram.h>
@@ -93,6 +94,7 @@ struct Renderer::Impl {
     std::vector<std::uint8_t> readback;
     // present(): an RGBA8 view of colorTexture to blit from; made on demand, dropped with the target.
     GLuint presentFramebuffer = 0, presentView = 0;
+    std::unique_ptr<gl::OcclusionQueries> queries;
 
     ~Impl();
     Status ensureTarget(int width, int height);
@@ -129,6 +131,7 @@ Result<std::unique_ptr<Renderer>> Renderer::create(const storage::SceneFile& sce
     impl->options = options;
     FF_ASSIGN_OR_RETURN(impl->geometryProgram, linkGlProgram({gl::kGeometryVertexShader}, gl::kGeometryFragmentShader));
     FF_ASSIGN_OR_RETURN(impl->cubeProgram, linkGlProgram({gl::kCubeShaderInputs, gl::kCubeVertexShader}, gl::kCubeFragmentShader));
+    FF_ASSIGN_OR_RETURN(impl->queries, gl::OcclusionQueries::create());
     FF_ASSIGN_OR_RETURN(impl->cubePointProgram, linkGlProgram({gl::kCubeShaderInputs, gl::kCubePointVertexShader}, gl::kCubeFragmentShader));
 
     // Slots hold a page's triangles without its trailer, so vertex offsets stay whole vertices.
@@ -384,6 +387,7 @@ Status Renderer::beginFrame(const FrameContext& frame, FrameOutput output, Frame
     s.frameViewProjection = frame.camera.projection(static_cast<float>(frame.width) / static_cast<float>(frame.height)) *
                        frame.camera.view();
     s.framePixelScale = frame.camera.pixelScale(static_cast<float>(sampleHeight));
+    s.queries->beginFrame(s.frameViewProjection);
 
     glBindFramebuffer(GL_FRAMEBUFFER, s.framebuffer);
     glViewport(0, 0, sampleWidth, sampleHeight);
@@ -413,6 +417,22 @@ Status Renderer::draw(const DrawList& batch, FrameStats& stats) {
     s.drawCubes(batch, s.frameViewProjection, s.framePixelScale);
     stats.drawMs += millisecondsSince(start);
     return Status::ok();
+}
+
+QueryTicket Renderer::issue(std::span<const OcclusionBox> group) {
+    return mImpl->queries->issue(group);
+}
+
+void Renderer::submit() {
+    glFlush();
+}
+
+bool Renderer::ready(QueryTicket ticket) {
+    return mImpl->queries->ready(ticket);
+}
+
+bool Renderer::anyVisible(QueryTicket ticket) {
+    return mImpl->queries->anyVisible(ticket);
 }
 
 bool Renderer::admit(std::uint64_t geometryPage) {

@@ -7,9 +7,13 @@
 #include <ff/storage/SceneFile.h>
 
 #include <cstdint>
-#include <string>
-#include <unordered_set>
+#include <memory>
 #include <vector>
+
+namespace ff::runtime::detail {
+class NodePages;
+struct PayloadRun;
+} // namespace ff::runtime::detail
 
 namespace ff::runtime {
 
@@ -37,12 +41,16 @@ namespace ff::runtime {
 class BackToFrontTraversal final : public ITraversal {
 public:
     BackToFrontTraversal(const storage::SceneFile& scene, IPageAccess& pages);
+    ~BackToFrontTraversal() override;
 
     [[nodiscard]] Status
     traverse(const FrameContext& frame, TraversalServices services, FrameStats& stats) override;
-    [[nodiscard]] const std::vector<Status>& newFailures() const noexcept override {
-        return mNewFailures;
-    }
+    [[nodiscard]] const std::vector<Status>& newFailures() const noexcept override;
+
+    /** Draws only the frame's cubes, in the same back-to-front order (and counts them); its
+     *  geometry was drawn by another traversal that told IVisibility what it found Occluded
+     *  (OcclusionTraversal's second pass). */
+    void setCubesOnly(bool cubesOnly) noexcept { mCubesOnly = cubesOnly; }
 
     /** Bytes the walk's own scratch holds now (its batch, stacks and per-prototype runs). */
     [[nodiscard]] std::size_t scratchBytes() const noexcept;
@@ -63,26 +71,12 @@ private:
         storage::NodeRef ref;
         float distance;
     };
-    struct Segment {
-        storage::GeometrySegment segment;
-        const std::byte* payload;
-    };
     /** What the pass in progress emits (see the class comment). */
     enum class Pass { Everything, GeometryOnly, CubesOnly };
-    enum class Fetch { Ready, Missing };
 
     Status walk(Pass pass, FrameStats& stats);
     void
     visit(const storage::NodeRecord& node, storage::NodeRef ref, std::size_t active, int depth);
-    /** Looks a page up; Failed pages are reported once and read as Missing. */
-    Fetch
-    fetch(std::uint64_t page,
-          storage::PageType type,
-          float priority,
-          std::span<const std::byte>& payload);
-    Fetch readNode(storage::NodeRef ref, float priority, storage::NodeRecord& out);
-    /** Fills mSegments with the node's own geometry runs if every page is Ready and admitted. */
-    Fetch collectGeometry(const storage::NodeRecord& node, float priority);
     void emitGeometry(
             const storage::GeometrySegment& segment, const std::byte* payload, std::size_t active);
     void emitCube(const storage::NodeRecord& node, storage::NodeRef ref, std::size_t active);
@@ -93,14 +87,11 @@ private:
     void flushIfFull();
     Status flush();
     void walkFull();
-    void mergeGeometryDraws();
     void collectPrototypeGeometry(std::uint32_t prototype);
-    void reportFailure(const Status& failure);
 
     const storage::SceneFile& mScene;
-    IPageAccess& mPages;
-    std::unordered_set<std::string> mReported; ///< messages ("page N: ...") already reported
-    std::vector<Status> mNewFailures;
+    std::unique_ptr<detail::NodePages> mNodePages;
+    bool mCubesOnly = false;
     // Per-frame state.
     const FrameContext* mFrame = nullptr;
     TraversalServices* mServices = nullptr;
@@ -113,8 +104,7 @@ private:
     DrawList mList;
     std::vector<ActiveTransform> mActive; ///< the chain of instances being walked, root first
     std::vector<ChildEntry> mChildStack;
-    std::vector<Segment> mSegments;
-    std::vector<storage::GeometrySegment> mRuns; ///< collectGeometry's scratch
+    std::vector<detail::PayloadRun> mRuns; ///< a cell's own geometry runs
     /** Full method: every geometry run of each prototype, merged per page (built on demand). */
     std::vector<std::vector<storage::GeometrySegment>> mPrototypeGeometry;
     std::vector<bool> mPrototypeGeometryReady;

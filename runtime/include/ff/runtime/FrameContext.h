@@ -22,6 +22,29 @@ struct FrameBudgets {
 };
 
 /**
+ * Occlusion culling (OcclusionTraversal): a front-to-back walk that tests node boxes against
+ * what is already drawn before drawing their subtrees, with CHC++'s temporal coherence.
+ */
+struct OcclusionOptions {
+    bool enabled = false;
+    /** Occlusion tests a frame may issue; past it, untested nodes are drawn (Unknown). */
+    std::uint32_t queryBudget = 1024;
+    /** Nodes waiting for a test are issued together once this many are queued (or when the
+     *  walk has nothing else to do). */
+    std::uint32_t batchNodes = 32;
+    /** A node that stayed visible is tested again only every this many frames (each node at its
+     *  own phase, so the tests spread over frames); between tests it is drawn without one. */
+    std::uint32_t visibleTestInterval = 8;
+    /** Nodes hidden at their last test are tested together, up to this many per query (a
+     *  multiquery); a group found visible is tested again node by node. */
+    std::uint32_t multiqueryNodes = 8;
+    /** A node is tested only if about this many triangles lie below it (a prototype's
+     *  triangles shared out by level); smaller subtrees are drawn without a test, which costs
+     *  less than testing them. */
+    std::uint32_t minTestTriangles = 256;
+};
+
+/**
  * Everything one frame is drawn from: the camera, the output viewport, the representation
  * choices, the time and the budgets. The one argument of traversal, drawing and statistics.
  */
@@ -37,6 +60,7 @@ struct FrameContext {
      *  is animated yet: it is carried so the seam exists when keyframed splats land. */
     double timeSeconds = 0.0;
     SelectionOptions selection;
+    OcclusionOptions occlusion;
     FrameBudgets budgets;
 };
 

@@ -10,7 +10,7 @@ namespace ff::runtime {
 struct FrameStats {
     std::uint64_t nodesVisited = 0;  ///< node records read by selection
     std::uint64_t nodesCulled = 0;   ///< outside the frustum
-    std::uint64_t nodesOccluded = 0; ///< skipped because the renderer saw them Occluded
+    std::uint64_t nodesOccluded = 0; ///< skipped because an occlusion test found them hidden
     std::uint64_t instancesEntered = 0; ///< instance nodes refined into their prototype
     std::uint64_t cubesDrawn = 0;
     std::uint64_t cubeFacesDrawn = 0; ///< front-facing faces of drawn cubes
@@ -24,9 +24,12 @@ struct FrameStats {
     std::uint64_t pagesMissing = 0; ///< page lookups that found no usable page (pending or failed)
     /** Geometry pages the frame's GPU upload budget refused (their cells were drawn as cubes). */
     std::uint64_t uploadsRefused = 0;
+    std::uint64_t occlusionQueries = 0; ///< occlusion tests issued (a multiquery counts once)
+    std::uint64_t queriesWaited = 0;    ///< answers the walk had to wait for (nothing else to do)
     double selectMs = 0.0; ///< traversal, not counting the batches the renderer drew meanwhile
     double drawMs = 0.0;   ///< every batch's uploads and submission + GPU until finished (glFinish)
-    double totalMs = 0.0;  ///< selectMs + drawMs
+    double occlusionMs = 0.0; ///< issuing occlusion tests and reading (or waiting for) answers
+    double totalMs = 0.0;     ///< selectMs + occlusionMs + drawMs
 
     std::string toJson() const;
 };

@@ -17,10 +17,10 @@ namespace ff::runtime {
  * ever added to its end.
  *
  * Times: frame_ms is the whole frame on the wall clock; pump_ms (installing finished reads),
- * select_ms (traversal), draw_ms (uploads, draw calls, the GPU until done) and prefetch_ms
- * (the traversal for the camera ahead) are its parts; the rest is the image's readback. Later
- * parts of a frame get a column of their own (e.g. the occlusion tests' cull_ms) and leave the
- * others' meaning alone.
+ * select_ms (traversal), occlusion_ms (issuing occlusion tests and reading their answers),
+ * draw_ms (uploads, draw calls, the GPU until done) and prefetch_ms (the traversal for the camera
+ * ahead) are its parts; the rest is the image's readback. Later parts of a frame get a column of
+ * their own and leave the others' meaning alone.
  */
 struct FrameTelemetry {
     std::int64_t frame = 0;   ///< frames since the session opened, from 0
@@ -46,6 +46,9 @@ struct FrameTelemetry {
     /** Page bytes the frame used (found Ready), by type: its working set. */
     std::uint64_t nodePageBytes = 0;
     std::uint64_t geometryPageBytes = 0;
+    /** Triangles drawn as a share of the scene's, instances counted (Meißner et al.'s "render
+     *  rate"), in %. */
+    double renderRatePercent = 0.0;
     /** The frame waited for pages (a --sync session's frames with debt). */
     bool stalled = false;
     /** Against a reference image, when the caller measured it. */

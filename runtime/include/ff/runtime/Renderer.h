@@ -37,12 +37,13 @@ enum class FrameOutput {
  * under OSMesa and in a GLFW window.
  *
  * A frame is beginFrame(), draw() once per batch (the traversal's IDrawSink), then
- * finishImage() or finishPresent(). It is also the traversal's IUploadGate: at most
- * FrameBudgets::gpuUploadsPerFrame pages not yet in the arena are admitted per frame.
+ * finishImage() or finishPresent(). It is also the traversal's IUploadGate (at most
+ * FrameBudgets::gpuUploadsPerFrame pages not yet in the arena are admitted per frame) and its
+ * IOcclusionTester (hardware occlusion queries against the frame's depth so far).
  *
  * Needs a current GL 4.5 context; main thread only.
  */
-class Renderer final : public IDrawSink, public IUploadGate {
+class Renderer final : public IDrawSink, public IUploadGate, public IOcclusionTester {
 public:
     [[nodiscard]] static Result<std::unique_ptr<Renderer>> create(
             const storage::SceneFile& scene, const RendererOptions& options = {});
@@ -63,6 +64,12 @@ public:
 
     /** Admits a geometry page for this frame (see the class comment). */
     [[nodiscard]] bool admit(std::uint64_t geometryPage) override;
+
+    // IOcclusionTester: GL_ANY_SAMPLES_PASSED_CONSERVATIVE queries, pooled; submit() flushes.
+    [[nodiscard]] QueryTicket issue(std::span<const OcclusionBox> group) override;
+    void submit() override;
+    [[nodiscard]] bool ready(QueryTicket ticket) override;
+    [[nodiscard]] bool anyVisible(QueryTicket ticket) override;
 
     /** Waits for the GPU (counted in drawMs), reads the target back and resolves it to
      *  width x height. Errors: Internal (GL error). */

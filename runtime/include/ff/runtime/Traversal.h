@@ -4,15 +4,17 @@
 // says what to draw. Strategies differ in order and in what they learn from the renderer:
 //
 //   FrameContext ──► ITraversal ──► IDrawSink (bounded DrawList batches) ──► GL
-//                      │   ▲  ▲
-//        IPageAccess ◄─┘   │  └─ IUploadGate: may this frame upload that geometry page?
-//        (never waits)     └──── IVisibility: Unknown | Visible | Occluded, per (instance, node)
+//                      │   ▲  ▲  ▲
+//        IPageAccess ◄─┘   │  │  └─ IOcclusionTester: is this box hidden by what is drawn?
+//        (never waits)     │  └──── IUploadGate: may this frame upload that geometry page?
+//                          └─────── IVisibility: Unknown | Visible | Occluded, per (instance, node)
 //
-// BackToFrontTraversal (Chamberlain et al.'s ε walk) is today's strategy; it asks IVisibility
-// and skips what is Occluded, so a renderer that answers makes it cull. A front-to-back walk
-// that queries visibility itself and keeps state per NodeKey across frames (CHC++-style, issue
-// 15) implements the same interface. Traversal stays CPU code: the GL side answers through the
-// three narrow interfaces below, and every one has a do-nothing implementation for tests.
+// BackToFrontTraversal (Chamberlain et al.'s ε walk) asks IVisibility and skips what is
+// Occluded. OcclusionTraversal walks front to back, tests boxes through IOcclusionTester, keeps
+// state per NodeKey across frames (CHC++-style coherence) and then lets a back-to-front walk
+// draw the cubes with what it found Occluded. Traversal stays CPU code: the GL side answers
+// through the narrow interfaces below, and every one has a do-nothing or fake implementation
+// for tests.
 
 #include <ff/runtime/DrawList.h>
 #include <ff/runtime/FrameContext.h>
@@ -22,7 +24,9 @@
 
 #include <glm/glm.hpp>
 
+#include <array>
 #include <cstdint>
+#include <span>
 #include <vector>
 
 namespace ff::runtime {
@@ -41,36 +45,62 @@ struct NodeKey {
     friend bool operator==(const NodeKey&, const NodeKey&) = default;
 };
 
+struct NodeKeyHash {
+    std::size_t operator()(const NodeKey& key) const noexcept {
+        const std::uint64_t node = (std::uint64_t{key.node.page} << 32) | key.node.slot;
+        return static_cast<std::size_t>((key.instancePath ^ (node * 0xC2B2AE3D27D4EB4Full)) *
+                                        0x9E3779B97F4A7C15ull >>
+                                        7);
+    }
+};
+
 /** The instance path below `parent` through instance record `instance`. */
 constexpr std::uint64_t childInstancePath(std::uint64_t parent, std::uint32_t instance) noexcept {
     return (parent ^ (std::uint64_t{instance} + 1)) * 0x9E3779B97F4A7C15ull + 0x632BE59BD9B4E019ull;
 }
 
-/**
- * The renderer's answers about visibility (hardware occlusion queries, a depth pyramid read
- * back, ...). Answers arrive late: what a query issued in frame N says is read in frame N + k.
- */
+/** What is known of nodes' visibility (this frame's occlusion tests, or the last frame's). */
 class IVisibility {
 public:
     virtual ~IVisibility() = default;
-    /** The latest answer for `key`'s box (Unknown: never tested, or not answered yet). */
+    /** The answer for `key` (Unknown: never tested). Unknown and Visible are drawn. */
     [[nodiscard]] virtual Visibility visibility(const NodeKey& key) const = 0;
-    /** Asks for `key`'s box (in the frame of `batch.transforms[transform]` of the batch now
-     *  being filled) to be tested against what is drawn this frame. */
-    virtual void
-    test(const NodeKey& key,
-         const glm::vec3& boxMin,
-         const glm::vec3& boxMax,
-         std::uint32_t transform) = 0;
 };
 
-/** Knows nothing: every node is Unknown (drawn), tests are dropped. */
+/** Knows nothing: every node is Unknown (drawn). */
 class NoVisibility final : public IVisibility {
 public:
     [[nodiscard]] Visibility visibility(const NodeKey&) const override {
         return Visibility::Unknown;
     }
-    void test(const NodeKey&, const glm::vec3&, const glm::vec3&, std::uint32_t) override {}
+};
+
+/** A box to test, as its eight corners in world space (corner i has bit 0 = x max, bit 1 = y
+ *  max, bit 2 = z max in the box's own frame, so a transformed box stays exact). */
+struct OcclusionBox {
+    std::array<glm::vec3, 8> corners;
+};
+
+/** A query in flight this frame. */
+using QueryTicket = std::uint32_t;
+
+/**
+ * Tests boxes against the depth drawn so far this frame (hardware occlusion queries; a depth
+ * pyramid). A box is visible when any sample of it would pass the depth test (<=): the answer is
+ * conservative, never Occluded for a box something of which can still be seen, since what is
+ * drawn later only comes nearer. Answers arrive late; ready() never waits, anyVisible() does.
+ * Tickets are valid until the frame ends.
+ */
+class IOcclusionTester {
+public:
+    virtual ~IOcclusionTester() = default;
+    /** One query over a group of boxes: visible if any of them is (a multiquery). */
+    [[nodiscard]] virtual QueryTicket issue(std::span<const OcclusionBox> group) = 0;
+    /** Starts the work on what was issued (queries answer only after it is submitted). */
+    virtual void submit() = 0;
+    [[nodiscard]] virtual bool ready(QueryTicket ticket) = 0;
+    /** The answer; waits for it if it is not ready. */
+    [[nodiscard]] virtual bool anyVisible(QueryTicket ticket) = 0;
 };
 
 /**
@@ -112,8 +142,10 @@ public:
 /** What a traversal talks to besides the pages. Borrowed for one traverse() call. */
 struct TraversalServices {
     IDrawSink& sink;
-    IVisibility& visibility;
+    const IVisibility& visibility;
     IUploadGate& uploads;
+    /** Occlusion tests (OcclusionTraversal needs one; the others ignore it). */
+    IOcclusionTester* occlusion = nullptr;
 };
 
 /** A strategy for walking the scene once per frame. Main thread only. */

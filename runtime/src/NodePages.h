@@ -1,0 +1,114 @@
+#pragma once
+
+// What every traversal needs to read the hierarchy and decide a node's representation: page
+// lookups that never wait and report each failure once, and Chamberlain's ε rule. Shared by the
+// back-to-front and the occlusion traversals, so both draw exactly the same cut.
+
+#include <ff/runtime/Camera.h>
+#include <ff/runtime/DrawList.h>
+#include <ff/runtime/FrameStats.h>
+#include <ff/runtime/PageAccess.h>
+#include <ff/runtime/Selection.h>
+#include <ff/runtime/TransformMetric.h>
+#include <ff/runtime/Traversal.h>
+#include <ff/storage/SceneFile.h>
+
+#include <glm/glm.hpp>
+
+#include <array>
+#include <span>
+#include <string>
+#include <unordered_set>
+#include <vector>
+
+namespace ff::runtime::detail {
+
+/** Priority for pages nobody can see the size of yet (the root, a full draw). */
+inline constexpr float kTopPriority = 1e30f;
+/** Deeper than any builder writes (octree levels <= 20 per prototype, instance level <= 24 plus
+ *  groups): a file nesting further has a reference cycle, which must not overflow the stack. */
+inline constexpr int kMaxNesting = 128;
+
+inline glm::vec3 toVec3(const std::array<float, 3>& a) {
+    return {a[0], a[1], a[2]};
+}
+
+inline bool isCell(const storage::NodeRecord& node) {
+    return node.kind == static_cast<std::uint8_t>(storage::NodeKind::Cell);
+}
+
+glm::mat4 instanceTransform(const storage::InstanceRecord& instance);
+
+/** The ε rule's measure: the side, in pixels, of the square the node's cell covers on screen
+ *  (its silhouette seen from the eye at the cell's nearest point; infinite when the eye is in). */
+float projectedPixels(
+        const storage::NodeRecord& node,
+        const glm::vec3& localEye,
+        const TransformMetric& metric,
+        const Camera& camera,
+        float pixelScale);
+
+/** Whether the ε rule draws the node as its cube at `projected` pixels. */
+bool drawnAsCube(const storage::NodeRecord& node, float projected, const SelectionOptions& options);
+
+/** Sorts a batch's geometry by transform and page and merges runs that continue one another
+ *  (far fewer draw commands; the same triangles in the same order whatever the walk's order,
+ *  so ε = 0 reproduces --method full). Returns the draws left. */
+std::size_t mergeGeometryDraws(std::vector<GeometryDraw>& draws);
+
+/** A run of a node's own triangles with the bytes of its page. */
+struct PayloadRun {
+    storage::GeometrySegment segment;
+    const std::byte* payload;
+};
+
+enum class Fetch { Ready, Missing };
+
+/**
+ * Node and geometry pages as a traversal reads them within one frame: through IPageAccess,
+ * never waiting (a page not Ready is Missing and has been asked for), counting misses in the
+ * frame's stats, and reporting each failed page once over the traversal's life.
+ */
+class NodePages {
+public:
+    NodePages(const storage::SceneFile& scene, IPageAccess& pages)
+        : mScene(scene)
+        , mPages(pages) {}
+
+    /** Starts a frame: failures met from now on go to newFailures(). */
+    void beginFrame() { mNewFailures.clear(); }
+    /** Where misses and refused uploads are counted from now on. */
+    void countInto(FrameStats& stats) noexcept { mStats = &stats; }
+
+    Fetch
+    fetch(std::uint64_t page,
+          storage::PageType type,
+          float priority,
+          std::span<const std::byte>& payload);
+    Fetch readNode(storage::NodeRef ref, float priority, storage::NodeRecord& out);
+    /** Fills `out` with the node's own geometry runs if every page is Ready and admitted by
+     *  `uploads` (every page is asked for before answering, so all are in flight together). */
+    Fetch collectGeometry(
+            const storage::NodeRecord& node,
+            float priority,
+            IUploadGate& uploads,
+            std::vector<PayloadRun>& out);
+    /** The child page of a node that has children (Ready: `payload` holds it). */
+    Fetch
+    childPage(const storage::NodeRecord& node, float priority, std::span<const std::byte>& payload);
+
+    void reportFailure(const Status& failure);
+    [[nodiscard]] const std::vector<Status>& newFailures() const noexcept { return mNewFailures; }
+    [[nodiscard]] const storage::SceneFile& scene() const noexcept { return mScene; }
+    [[nodiscard]] FrameStats& stats() noexcept { return *mStats; }
+
+private:
+    const storage::SceneFile& mScene;
+    IPageAccess& mPages;
+    FrameStats* mStats = nullptr;
+    std::unordered_set<std::string> mReported; ///< messages ("page N: ...") already reported
+    std::vector<Status> mNewFailures;
+    std::vector<storage::GeometrySegment> mRuns; ///< collectGeometry's scratch
+};
+
+} // namespace ff::runtime::detail

@@ -1,0 +1,785 @@
+// Occlusion culling with temporal coherence: Mattausch, Bittner, Wimmer, "CHC++: Coherent
+// Hierarchical Culling Revisited", Eurographics 2008, on the ε cut of Chamberlain et al. '96,
+// with instances, streaming and bounded draw batches. See OcclusionTraversal.h.
+
+#include "NodePages.h"
+
+#include <ff/runtime/BackToFrontTraversal.h>
+#include <ff/runtime/Frustum.h>
+#include <ff/runtime/OcclusionTraversal.h>
+#include <ff/runtime/TransformMetric.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <deque>
+#include <limits>
+#include <unordered_map>
+#include <unordered_set>
+
+namespace ff::runtime {
+
+namespace {
+
+using detail::Fetch;
+using detail::toVec3;
+
+constexpr std::uint32_t kNone = std::numeric_limits<std::uint32_t>::max();
+/** History entries not seen for this many frames are dropped. */
+constexpr std::uint32_t kHistoryFrames = 64;
+/** Nodes hidden at this many tests in a row are tested together (CHC++'s multiqueries group
+ *  the nodes likely to stay hidden; a group found visible costs a test per node again). */
+constexpr std::uint16_t kStableHiddenTests = 2;
+
+double millisecondsSince(std::chrono::steady_clock::time_point start) {
+    return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start)
+            .count();
+}
+
+/** What the walk remembers of a node between frames. */
+struct History {
+    std::uint32_t lastSeen = 0;    ///< frame that last reached it
+    std::uint32_t lastVisible = 0; ///< frame that last drew something of it (0: never)
+    std::uint16_t hiddenTests = 0; ///< tests in a row that found it hidden
+    bool hidden = false;           ///< its last test found it hidden
+};
+
+class HistoryVisibility final : public IVisibility {
+public:
+    explicit HistoryVisibility(const std::unordered_map<NodeKey, History, NodeKeyHash>& history)
+        : mHistory(history) {}
+    [[nodiscard]] Visibility visibility(const NodeKey& key) const override {
+        const auto it = mHistory.find(key);
+        if (it == mHistory.end())
+            return Visibility::Unknown;
+        return it->second.hidden ? Visibility::Occluded : Visibility::Visible;
+    }
+
+private:
+    const std::unordered_map<NodeKey, History, NodeKeyHash>& mHistory;
+};
+
+/** This frame's answers, for pass 2. */
+class FrameOccluded final : public IVisibility {
+public:
+    [[nodiscard]] Visibility visibility(const NodeKey& key) const override {
+        return mOccluded.contains(key) ? Visibility::Occluded : Visibility::Unknown;
+    }
+    void clear() { mOccluded.clear(); }
+    void insert(const NodeKey& key) { mOccluded.insert(key); }
+
+private:
+    std::unordered_set<NodeKey, NodeKeyHash> mOccluded;
+};
+
+} // namespace
+
+struct OcclusionTraversal::Impl {
+    /** An instance frame the walk has entered this frame. */
+    struct Transform {
+        glm::mat4 matrix;
+        glm::vec3 localEye;
+        TransformMetric metric;
+        Frustum frustum;
+        std::uint64_t instancePath;
+        std::uint64_t prototypeTriangles; ///< of the prototype it places (0: the instance level)
+        std::uint32_t listBatch;          ///< the batch it was last added to (kNone: none yet)
+        std::uint32_t listIndex;          ///< its index in that batch's transforms
+    };
+    /** A node waiting in the front-to-back queue. */
+    struct Entry {
+        storage::NodeRecord record;
+        storage::NodeRef ref;
+        float distance; ///< nearest world distance of its bounds from the eye
+        std::uint32_t transform;
+        std::uint32_t parent; ///< the slot of the node that queued it (kNone: the root)
+        std::uint32_t depth;
+    };
+    /** A node the walk reached this frame, for pulling visibility up. */
+    struct Slot {
+        NodeKey key;
+        std::uint32_t parent;
+        bool visible;
+    };
+    /** A node waiting for (or in) a test. */
+    struct Tested {
+        Entry entry;
+        std::uint32_t slot;
+        float projected;
+        bool cube; ///< the ε rule draws it as its cube (pass 2)
+    };
+    struct Query {
+        QueryTicket ticket;
+        std::uint32_t first; ///< its nodes: mTested[first, first + count)
+        std::uint32_t count;
+    };
+    struct LateQuery {
+        QueryTicket ticket;
+        NodeKey key;
+    };
+
+    Impl(const storage::SceneFile& sceneFile, IPageAccess& pages)
+        : scene(sceneFile)
+        , nodePages(sceneFile, pages)
+        , cubes(sceneFile, pages)
+        , historyView(history) {
+        cubes.setCubesOnly(true);
+    }
+
+    Status traverse(const FrameContext& frame, TraversalServices services, FrameStats& stats);
+    void process(const Entry& entry);
+    /** Draws a node found (or taken as) visible: its cube is pass 2's, a refined node's
+     *  geometry is drawn and its children queued. */
+    void draw(const Tested& node);
+    void refine(const Entry& entry, std::uint32_t slot, float projected);
+    enum class Expanded { Deferred, NothingOwn, DrewGeometry };
+    /** Expands a visible cell: draws its own geometry and hands each child to `child`. Deferred
+     *  (nothing done) when its pages are not all resident or a child is unreadable: its cube
+     *  stands in for it (pass 2). */
+    template <typename Child>
+    Expanded expandCell(
+            const storage::NodeRecord& node,
+            std::uint32_t transform,
+            float priority,
+            Child&& child);
+    bool enterInstance(
+            const storage::NodeRecord& node,
+            std::uint32_t parentTransform,
+            float priority,
+            std::uint32_t& transform,
+            storage::NodeRef& rootRef,
+            storage::NodeRecord& root);
+    /** Draws a subtree too small to test, depth first, without tests or history. */
+    void drawSubtree(const storage::NodeRecord& node, std::uint32_t transform, std::uint32_t depth);
+    /** Whether enough lies below the node to pay for a test (OcclusionOptions::minTestTriangles).
+     */
+    bool worthTesting(const Entry& entry) const;
+    void reportCycle();
+    void queueForTest(const Tested& node);
+    void issueQueued();
+    void answer(const Query& query, bool visible);
+    void testLate(const Entry& entry, std::uint32_t slot);
+    bool testable(const Entry& entry, OcclusionBox& box) const;
+    void pushChild(
+            const storage::NodeRecord& record,
+            storage::NodeRef ref,
+            std::uint32_t transform,
+            std::uint32_t parent,
+            std::uint32_t depth);
+    std::uint32_t addTransform(
+            const glm::mat4& matrix, std::uint64_t instancePath, std::uint64_t prototypeTriangles);
+    std::uint32_t listIndex(std::uint32_t transform);
+    void markVisible(std::uint32_t slot);
+    void flush();
+    void finishFrame();
+    bool budgetLeft() const { return stats->occlusionQueries < frame->occlusion.queryBudget; }
+    QueryTicket issue(std::span<const OcclusionBox> boxes);
+    /** The queue's order: a max-heap on this is a min-heap on distance. */
+    static bool farther(const Entry& a, const Entry& b) { return a.distance > b.distance; }
+
+    const storage::SceneFile& scene;
+    detail::NodePages nodePages;
+    BackToFrontTraversal cubes; ///< pass 2
+    std::unordered_map<NodeKey, History, NodeKeyHash> history;
+    HistoryVisibility historyView;
+    FrameOccluded occluded;
+    std::vector<Status> failures; ///< both passes' new failures
+    std::uint32_t frameNumber = 0;
+
+    // Per-frame state.
+    const FrameContext* frame = nullptr;
+    TraversalServices* services = nullptr;
+    FrameStats* stats = nullptr;
+    float pixelScale = 1.0f;
+    glm::mat4 view{1.0f};
+    glm::mat4 viewProjection{1.0f};
+    bool depthWritten = false; ///< some geometry reached GL this frame: tests have occluders
+    std::uint32_t batchNumber = 0;
+    DrawList list;
+    std::vector<Transform> transforms;
+    std::vector<Entry> queue; ///< a min-heap on distance
+    std::vector<Slot> slots;
+    std::vector<Tested> waiting; ///< queued for the next batch of tests
+    std::vector<Tested> tested;  ///< in a test (Query ranges point here)
+    std::deque<Query> pending;
+    std::vector<LateQuery> late;
+    std::vector<detail::PayloadRun> runs;
+    struct ChildRecord {
+        storage::NodeRecord record;
+        storage::NodeRef ref;
+    };
+    std::vector<ChildRecord> children; ///< expandCell's stack of decoded children
+    bool cubesSeen = false;            ///< pass 1 met a node drawn as its cube: pass 2 has work
+    std::vector<OcclusionBox> boxes;
+};
+
+OcclusionTraversal::OcclusionTraversal(const storage::SceneFile& scene, IPageAccess& pages)
+    : mImpl(std::make_unique<Impl>(scene, pages)) {}
+OcclusionTraversal::~OcclusionTraversal() = default;
+
+Status OcclusionTraversal::traverse(
+        const FrameContext& frame, TraversalServices services, FrameStats& stats) {
+    return mImpl->traverse(frame, services, stats);
+}
+
+const std::vector<Status>& OcclusionTraversal::newFailures() const noexcept {
+    return mImpl->failures;
+}
+
+const IVisibility& OcclusionTraversal::history() const noexcept {
+    return mImpl->historyView;
+}
+
+std::size_t OcclusionTraversal::historySize() const noexcept {
+    return mImpl->history.size();
+}
+
+Status OcclusionTraversal::Impl::traverse(
+        const FrameContext& frameContext, TraversalServices frameServices, FrameStats& frameStats) {
+    if (!frameServices.occlusion || frameContext.selection.method != Method::Hierarchical)
+        return Status(
+                ErrorCode::InvalidArgument,
+                "occlusion culling needs an occlusion tester and the hierarchical method");
+    frame = &frameContext;
+    services = &frameServices;
+    stats = &frameStats;
+    ++frameNumber;
+    nodePages.beginFrame();
+    nodePages.countInto(frameStats);
+    failures.clear();
+    occluded.clear();
+    pixelScale = frame->camera.pixelScale(static_cast<float>(frame->height));
+    const float aspect =
+            static_cast<float>(frame->width) / std::max(static_cast<float>(frame->height), 1.0f);
+    view = frame->camera.view();
+    viewProjection = frame->camera.projection(aspect) * view;
+    depthWritten = false;
+    cubesSeen = false;
+    list.clear();
+    transforms.clear();
+    queue.clear();
+    slots.clear();
+    waiting.clear();
+    tested.clear();
+    pending.clear();
+    late.clear();
+    ++batchNumber;
+
+    // Pass 1: opaque geometry, front to back, with occlusion tests.
+    addTransform(glm::mat4(1.0f), 0, 0);
+    const storage::NodeRef rootRef = scene.header().root;
+    storage::NodeRecord root{};
+    if (nodePages.readNode(rootRef, detail::kTopPriority, root) != Fetch::Ready) {
+        failures = nodePages.newFailures();
+        if (!failures.empty())
+            return failures.front().withContext("the root node is unreadable");
+        return Status::ok(); // not resident yet: nothing to draw this frame
+    }
+    pushChild(root, rootRef, 0, kNone, 0);
+    IOcclusionTester& tester = *services->occlusion;
+    while (!queue.empty() || !waiting.empty() || !pending.empty()) {
+        // Answers that have arrived; when there is nothing else to do, wait for the oldest.
+        while (!pending.empty()) {
+            const auto asked = std::chrono::steady_clock::now();
+            const bool idle = queue.empty() && waiting.empty();
+            if (!idle && !tester.ready(pending.front().ticket)) {
+                stats->occlusionMs += millisecondsSince(asked);
+                break;
+            }
+            if (idle && !tester.ready(pending.front().ticket))
+                ++stats->queriesWaited;
+            const Query query = pending.front();
+            pending.pop_front();
+            const bool visible = tester.anyVisible(query.ticket);
+            stats->occlusionMs += millisecondsSince(asked);
+            answer(query, visible);
+        }
+        if (queue.empty()) {
+            if (!waiting.empty())
+                issueQueued();
+            continue;
+        }
+        std::pop_heap(queue.begin(), queue.end(), farther);
+        const Entry entry = queue.back();
+        queue.pop_back();
+        process(entry);
+        // Without history (the first frame, a jump): once the nearest geometry is known, draw
+        // it, so what follows has occluders to be tested against.
+        if (!depthWritten && !list.geometry.empty())
+            flush();
+        if (waiting.size() >= std::max<std::uint32_t>(frame->occlusion.batchNodes, 1))
+            issueQueued();
+    }
+    flush();
+
+    // Pass 2: the cubes, back to front, skipping what pass 1 found hidden.
+    FrameStats cubeStats;
+    const Status drawn =
+            cubesSeen ? cubes.traverse(
+                                *frame, {services->sink, occluded, services->uploads}, cubeStats)
+                      : Status::ok();
+    stats->cubesDrawn += cubeStats.cubesDrawn;
+    stats->cubeFacesDrawn += cubeStats.cubeFacesDrawn;
+    stats->nodesDeferred += cubeStats.nodesDeferred;
+    if (stats->cubeFacesPerLevel.size() < cubeStats.cubeFacesPerLevel.size())
+        stats->cubeFacesPerLevel.resize(cubeStats.cubeFacesPerLevel.size(), 0);
+    for (std::size_t level = 0; level < cubeStats.cubeFacesPerLevel.size(); ++level)
+        stats->cubeFacesPerLevel[level] += cubeStats.cubeFacesPerLevel[level];
+    stats->drawMs += cubeStats.drawMs;
+
+    // The late answers (for the next frame) and the history.
+    const auto asked = std::chrono::steady_clock::now();
+    finishFrame();
+    stats->occlusionMs += millisecondsSince(asked);
+    failures = nodePages.newFailures();
+    for (const Status& failure : cubes.newFailures())
+        if (std::find_if(failures.begin(), failures.end(), [&](const Status& f) {
+                return f.message() == failure.message();
+            }) == failures.end())
+            failures.push_back(failure);
+    return drawn;
+}
+
+std::uint32_t OcclusionTraversal::Impl::addTransform(
+        const glm::mat4& matrix, std::uint64_t instancePath, std::uint64_t prototypeTriangles) {
+    const glm::vec3 localEye = glm::vec3(glm::inverse(matrix) * glm::vec4(frame->camera.eye, 1.0f));
+    transforms.push_back(
+            {matrix,
+             localEye,
+             TransformMetric(matrix),
+             Frustum(viewProjection * matrix),
+             instancePath,
+             prototypeTriangles,
+             kNone,
+             0});
+    return static_cast<std::uint32_t>(transforms.size() - 1);
+}
+
+std::uint32_t OcclusionTraversal::Impl::listIndex(std::uint32_t transform) {
+    Transform& t = transforms[transform];
+    if (t.listBatch != batchNumber) {
+        t.listBatch = batchNumber;
+        t.listIndex = static_cast<std::uint32_t>(list.transforms.size());
+        list.transforms.push_back(t.matrix);
+        list.localEyes.push_back(t.localEye);
+    }
+    return t.listIndex;
+}
+
+void OcclusionTraversal::Impl::flush() {
+    if (list.geometry.empty())
+        return;
+    stats->geometryDraws += detail::mergeGeometryDraws(list.geometry);
+    const Status status = services->sink.draw(list, *stats);
+    if (!status)
+        nodePages.reportFailure(status);
+    list.clear();
+    ++batchNumber;
+    depthWritten = true;
+}
+
+void OcclusionTraversal::Impl::pushChild(
+        const storage::NodeRecord& record,
+        storage::NodeRef ref,
+        std::uint32_t transform,
+        std::uint32_t parent,
+        std::uint32_t depth) {
+    const Transform& t = transforms[transform];
+    const float distance = t.metric.nearestDistance(
+            toVec3(record.boundsMin), toVec3(record.boundsMax), t.localEye);
+    queue.push_back({record, ref, distance, transform, parent, depth});
+    std::push_heap(queue.begin(), queue.end(), farther);
+}
+
+void OcclusionTraversal::Impl::markVisible(std::uint32_t slot) {
+    while (slot != kNone && !slots[slot].visible) {
+        slots[slot].visible = true;
+        slot = slots[slot].parent;
+    }
+}
+
+void OcclusionTraversal::Impl::process(const Entry& entry) {
+    if (entry.depth > static_cast<std::uint32_t>(detail::kMaxNesting)) {
+        reportCycle();
+        return;
+    }
+    ++stats->nodesVisited;
+    const storage::NodeRecord& node = entry.record;
+    const Transform& t = transforms[entry.transform];
+    if (!t.frustum.intersects(toVec3(node.boundsMin), toVec3(node.boundsMax))) {
+        ++stats->nodesCulled;
+        return;
+    }
+    const NodeKey key{t.instancePath, entry.ref};
+    const auto slot = static_cast<std::uint32_t>(slots.size());
+    slots.push_back({key, entry.parent, false});
+    const float projected =
+            detail::projectedPixels(node, t.localEye, t.metric, frame->camera, pixelScale);
+    const Tested visit{
+            entry, slot, projected, detail::drawnAsCube(node, projected, frame->selection)};
+    if (!visit.cube && !worthTesting(entry)) {
+        // Too little below it to pay for a test: drawn whole, without tests or history.
+        markVisible(slot);
+        drawSubtree(node, entry.transform, entry.depth);
+        return;
+    }
+    // A prototype's root has its instance's box: the instance node was the test.
+    const bool prototypeRoot = node.level == 0 && t.prototypeTriangles > 0;
+    const auto it = history.find(key);
+    const bool visibleLastFrame = it != history.end() && it->second.lastVisible + 1 >= frameNumber;
+    const bool hiddenLastTest = it != history.end() && it->second.hidden;
+    // A cube costs less to draw than to test: one never seen is drawn, and tested late.
+    if (visibleLastFrame || prototypeRoot || (visit.cube && !hiddenLastTest))
+        draw(visit);
+    else
+        queueForTest(visit);
+}
+
+void OcclusionTraversal::Impl::draw(const Tested& node) {
+    if (node.cube) {
+        // Pass 2 draws it. A cube does not write depth, but whether it is hidden is worth
+        // knowing: an inner node all of whose cubes are hidden is tested as a whole next frame.
+        cubesSeen = true;
+        markVisible(node.slot);
+        testLate(node.entry, node.slot);
+        return;
+    }
+    refine(node.entry, node.slot, node.projected);
+}
+
+bool OcclusionTraversal::Impl::testable(const Entry& entry, OcclusionBox& box) const {
+    const storage::NodeRecord& node = entry.record;
+    const Transform& t = transforms[entry.transform];
+    // The box that holds all the node can draw: its geometry below and its cube.
+    glm::vec3 lo = glm::min(toVec3(node.boundsMin), toVec3(node.cellMin));
+    glm::vec3 hi = glm::max(toVec3(node.boundsMax), toVec3(node.cellMax));
+    // Grown a little, so a surface drawn exactly on the box's face does not hide the box from
+    // itself by a rounding of its depth.
+    const glm::vec3 extent = hi - lo;
+    const float grow =
+            1e-3f * std::max({extent.x, extent.y, extent.z}) + 1e-6f * std::max(
+                                                                               {std::abs(lo.x),
+                                                                                std::abs(lo.y),
+                                                                                std::abs(lo.z),
+                                                                                std::abs(hi.x),
+                                                                                std::abs(hi.y),
+                                                                                std::abs(hi.z)});
+    lo -= glm::vec3(grow);
+    hi += glm::vec3(grow);
+    const float nearLimit = frame->camera.zNear * 1.001f;
+    for (int c = 0; c < 8; ++c) {
+        const glm::vec3 local{(c & 1) ? hi.x : lo.x, (c & 2) ? hi.y : lo.y, (c & 4) ? hi.z : lo.z};
+        const glm::vec4 world = t.matrix * glm::vec4(local, 1.0f);
+        box.corners[static_cast<std::size_t>(c)] = glm::vec3(world);
+        // A box that reaches the near plane is clipped there: its samples say nothing.
+        if (-(view * world).z < nearLimit)
+            return false;
+    }
+    return true;
+}
+
+QueryTicket OcclusionTraversal::Impl::issue(std::span<const OcclusionBox> group) {
+    ++stats->occlusionQueries;
+    return services->occlusion->issue(group);
+}
+
+void OcclusionTraversal::Impl::queueForTest(const Tested& node) {
+    // Nothing to test against yet (the first occluders are being drawn), the box reaches the
+    // eye, or the frame's tests are spent: the node is Unknown, and Unknown is drawn.
+    OcclusionBox box;
+    const auto it = history.find(slots[node.slot].key);
+    const bool hiddenBefore = it != history.end() && it->second.hidden;
+    if ((!depthWritten && !hiddenBefore) || !budgetLeft() || !testable(node.entry, box)) {
+        draw(node);
+        return;
+    }
+    waiting.push_back(node);
+}
+
+void OcclusionTraversal::Impl::issueQueued() {
+    // The tests see everything drawn so far.
+    flush();
+    const auto start = std::chrono::steady_clock::now();
+    const std::uint32_t groupLimit = std::max<std::uint32_t>(frame->occlusion.multiqueryNodes, 1);
+    // Nodes that stayed hidden go first, in groups; the others one by one.
+    std::stable_partition(waiting.begin(), waiting.end(), [&](const Tested& t) {
+        const auto it = history.find(slots[t.slot].key);
+        return it != history.end() && it->second.hidden &&
+               it->second.hiddenTests >= kStableHiddenTests;
+    });
+    std::size_t i = 0;
+    while (i < waiting.size()) {
+        const auto it = history.find(slots[waiting[i].slot].key);
+        const bool stable = it != history.end() && it->second.hidden &&
+                            it->second.hiddenTests >= kStableHiddenTests;
+        std::size_t end = i + 1;
+        if (stable) {
+            while (end < waiting.size() && end - i < groupLimit) {
+                const auto next = history.find(slots[waiting[end].slot].key);
+                if (next == history.end() || !next->second.hidden ||
+                    next->second.hiddenTests < kStableHiddenTests)
+                    break;
+                ++end;
+            }
+        }
+        if (!budgetLeft()) {
+            // Out of tests: the rest are Unknown, drawn.
+            for (std::size_t j = i; j < waiting.size(); ++j)
+                draw(waiting[j]);
+            break;
+        }
+        boxes.clear();
+        const auto first = static_cast<std::uint32_t>(tested.size());
+        for (std::size_t j = i; j < end; ++j) {
+            OcclusionBox box;
+            (void)testable(waiting[j].entry, box); // checked when queued
+            boxes.push_back(box);
+            tested.push_back(waiting[j]);
+        }
+        pending.push_back({issue(boxes), first, static_cast<std::uint32_t>(end - i)});
+        i = end;
+    }
+    waiting.clear();
+    services->occlusion->submit();
+    stats->occlusionMs += millisecondsSince(start);
+}
+
+void OcclusionTraversal::Impl::answer(const Query& query, bool visible) {
+    if (visible && query.count > 1) {
+        // A group that did not stay hidden: each node is tested on its own.
+        const auto start = std::chrono::steady_clock::now();
+        for (std::uint32_t i = 0; i < query.count; ++i) {
+            const Tested node = tested[query.first + i];
+            History& h = history[slots[node.slot].key];
+            h.hiddenTests = 0; // no longer grouped
+            if (!budgetLeft()) {
+                draw(node);
+                continue;
+            }
+            OcclusionBox box;
+            (void)testable(node.entry, box);
+            const auto first = static_cast<std::uint32_t>(tested.size());
+            tested.push_back(node);
+            pending.push_back({issue({&box, 1}), first, 1});
+        }
+        services->occlusion->submit();
+        stats->occlusionMs += millisecondsSince(start);
+        return;
+    }
+    for (std::uint32_t i = 0; i < query.count; ++i) {
+        const Tested node = tested[query.first + i];
+        History& h = history[slots[node.slot].key];
+        h.lastSeen = frameNumber;
+        if (visible) {
+            h.hidden = false;
+            h.hiddenTests = 0;
+            draw(node);
+        } else {
+            h.hidden = true;
+            h.hiddenTests = static_cast<std::uint16_t>(
+                    std::min<int>(h.hiddenTests + 1, std::numeric_limits<std::uint16_t>::max()));
+            ++stats->nodesOccluded;
+            occluded.insert(slots[node.slot].key);
+        }
+    }
+}
+
+void OcclusionTraversal::Impl::testLate(const Entry& entry, std::uint32_t slot) {
+    // Spread over frames: each node at its own phase of the interval.
+    const std::uint32_t interval = std::max<std::uint32_t>(frame->occlusion.visibleTestInterval, 1);
+    const std::size_t phase = NodeKeyHash{}(slots[slot].key) % interval;
+    if ((frameNumber + phase) % interval != 0 || !budgetLeft())
+        return;
+    OcclusionBox box;
+    if (!testable(entry, box))
+        return;
+    const auto start = std::chrono::steady_clock::now();
+    late.push_back({issue({&box, 1}), slots[slot].key});
+    stats->occlusionMs += millisecondsSince(start);
+}
+
+bool OcclusionTraversal::Impl::enterInstance(
+        const storage::NodeRecord& node,
+        std::uint32_t parentTransform,
+        float priority,
+        std::uint32_t& transform,
+        storage::NodeRef& rootRef,
+        storage::NodeRecord& root) {
+    const std::uint32_t instanceIndex = node.geometryPage;
+    const storage::InstanceRecord& instance = scene.instances()[instanceIndex];
+    const storage::PrototypeRecord& prototype = scene.prototypes()[instance.prototype];
+    rootRef = prototype.root;
+    if (nodePages.readNode(rootRef, priority, root) != Fetch::Ready) {
+        cubesSeen = true; // drawn as its cube (pass 2)
+        return false;
+    }
+    ++stats->instancesEntered;
+    const Transform& parent = transforms[parentTransform];
+    transform = addTransform(
+            parent.matrix * detail::instanceTransform(instance),
+            childInstancePath(parent.instancePath, instanceIndex),
+            prototype.triangleCount);
+    return true;
+}
+
+template <typename Child>
+OcclusionTraversal::Impl::Expanded OcclusionTraversal::Impl::expandCell(
+        const storage::NodeRecord& node, std::uint32_t transform, float priority, Child&& child) {
+    std::span<const std::byte> childPage;
+    const bool childrenReady =
+            node.childCount == 0 || nodePages.childPage(node, priority, childPage) == Fetch::Ready;
+    const bool geometryReady =
+            nodePages.collectGeometry(node, priority, services->uploads, runs) == Fetch::Ready;
+    if (!childrenReady || !geometryReady) {
+        cubesSeen = true; // its cube stands in for the subtree (pass 2)
+        return Expanded::Deferred;
+    }
+    // Decode every child before drawing anything, so a bad child leaves the whole cell to its
+    // cube, as in the back-to-front walk.
+    const std::size_t base = children.size();
+    for (std::uint32_t c = 0; c < node.childCount; ++c) {
+        const storage::NodeRef childRef = storage::SceneFile::childRef(node, c);
+        Result<storage::NodeRecord> record = scene.decodeNode(childPage, childRef);
+        if (!record) {
+            nodePages.reportFailure(record.status());
+            children.resize(base);
+            cubesSeen = true;
+            return Expanded::Deferred;
+        }
+        children.push_back({*record, childRef});
+    }
+    const bool drew = !runs.empty();
+    if (drew) {
+        const std::uint32_t index = listIndex(transform);
+        for (const detail::PayloadRun& run : runs) {
+            stats->trianglesDrawn += run.segment.count;
+            list.geometry.push_back(
+                    {run.segment.page,
+                     run.payload,
+                     run.segment.firstSlot,
+                     run.segment.count,
+                     index});
+        }
+        if (list.bytes() >= frame->budgets.drawBatchBytes)
+            flush();
+    }
+    for (std::size_t i = base; i < base + node.childCount; ++i) {
+        const ChildRecord next = children[i]; // the vector may grow below
+        child(next.record, next.ref);
+    }
+    children.resize(base);
+    return drew ? Expanded::DrewGeometry : Expanded::NothingOwn;
+}
+
+void OcclusionTraversal::Impl::refine(const Entry& entry, std::uint32_t slot, float projected) {
+    const storage::NodeRecord& node = entry.record;
+    const float priority =
+            std::min(projected, detail::kTopPriority) * frame->selection.priorityScale;
+    if (!detail::isCell(node)) {
+        std::uint32_t transform = 0;
+        storage::NodeRef rootRef{};
+        storage::NodeRecord root{};
+        if (enterInstance(node, entry.transform, priority, transform, rootRef, root))
+            pushChild(root, rootRef, transform, slot, entry.depth + 1);
+        else
+            markVisible(slot);
+        return;
+    }
+    const Expanded expanded = expandCell(
+            node,
+            entry.transform,
+            priority,
+            [&](const storage::NodeRecord& child, storage::NodeRef ref) {
+                pushChild(child, ref, entry.transform, slot, entry.depth + 1);
+            });
+    if (expanded != Expanded::NothingOwn)
+        markVisible(slot); // its geometry, or its cube, is drawn
+    if (expanded != Expanded::NothingOwn || node.childCount == 0)
+        testLate(entry, slot);
+}
+
+void OcclusionTraversal::Impl::drawSubtree(
+        const storage::NodeRecord& node, std::uint32_t transform, std::uint32_t depth) {
+    if (depth > static_cast<std::uint32_t>(detail::kMaxNesting)) {
+        reportCycle();
+        return;
+    }
+    ++stats->nodesVisited;
+    const Transform& t = transforms[transform];
+    if (!t.frustum.intersects(toVec3(node.boundsMin), toVec3(node.boundsMax))) {
+        ++stats->nodesCulled;
+        return;
+    }
+    const float projected =
+            detail::projectedPixels(node, t.localEye, t.metric, frame->camera, pixelScale);
+    if (detail::drawnAsCube(node, projected, frame->selection)) {
+        cubesSeen = true;
+        return;
+    }
+    const float priority =
+            std::min(projected, detail::kTopPriority) * frame->selection.priorityScale;
+    if (!detail::isCell(node)) {
+        std::uint32_t inner = 0;
+        storage::NodeRef rootRef{};
+        storage::NodeRecord root{};
+        if (enterInstance(node, transform, priority, inner, rootRef, root))
+            drawSubtree(root, inner, depth + 1);
+        return;
+    }
+    (void)expandCell(
+            node, transform, priority, [&](const storage::NodeRecord& child, storage::NodeRef) {
+                drawSubtree(child, transform, depth + 1);
+            });
+}
+
+bool OcclusionTraversal::Impl::worthTesting(const Entry& entry) const {
+    const storage::NodeRecord& node = entry.record;
+    const std::uint64_t least = frame->occlusion.minTestTriangles;
+    if (!detail::isCell(node)) {
+        const storage::InstanceRecord& instance = scene.instances()[node.geometryPage];
+        return scene.prototypes()[instance.prototype].triangleCount >= least;
+    }
+    const std::uint64_t prototypeTriangles = transforms[entry.transform].prototypeTriangles;
+    if (prototypeTriangles == 0)
+        return true; // the instance level: its cells hold whole instances
+    // What lies below a node of a prototype's hierarchy, as if its triangles were a surface
+    // split evenly four ways a level (a volume splits eight ways: this errs towards testing).
+    const unsigned shift = std::min(2u * node.level, 62u);
+    return (prototypeTriangles >> shift) >= least;
+}
+
+void OcclusionTraversal::Impl::reportCycle() {
+    nodePages.reportFailure(
+            Status(ErrorCode::Corrupt,
+                   "node nesting deeper than " + std::to_string(detail::kMaxNesting) +
+                           " levels: the hierarchy has a reference cycle"));
+}
+
+void OcclusionTraversal::Impl::finishFrame() {
+    for (const Slot& slot : slots) {
+        History& h = history[slot.key];
+        h.lastSeen = frameNumber;
+        if (slot.visible) {
+            h.lastVisible = frameNumber;
+            h.hidden = false;
+        }
+    }
+    if (!late.empty()) {
+        services->occlusion->submit();
+        for (const LateQuery& query : late) {
+            if (services->occlusion->anyVisible(query.ticket))
+                continue;
+            // Hidden now: tested before it is drawn next frame.
+            History& h = history[query.key];
+            h.hidden = true;
+            h.lastVisible = 0;
+            h.hiddenTests = 1;
+        }
+    }
+    if (frameNumber % kHistoryFrames == 0)
+        std::erase_if(history, [&](const auto& item) {
+            return item.second.lastSeen + kHistoryFrames < frameNumber;
+        });
+}
+
+} // namespace ff::runtime

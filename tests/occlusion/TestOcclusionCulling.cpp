@@ -1,0 +1,263 @@
+// Occlusion culling drawn for real: the same frames with --occlusion on and off, side by side.
+// What is behind a wall never reaches GL; what is visible is never culled (the images agree
+// except for pixels where two surfaces tie in depth); history never hides what just came into
+// view; a cold streaming cache is not waited for.
+
+#include <ff/builder/Generators.h>
+#include <ff/builder/SceneBuilder.h>
+#include <ff/runtime/CameraOptions.h>
+#include <ff/runtime/OffscreenContext.h>
+#include <ff/runtime/StreamingSession.h>
+#include <ff/storage/SceneFile.h>
+
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <memory>
+#include <string>
+#include <vector>
+
+namespace ff::runtime {
+namespace {
+
+namespace fs = std::filesystem;
+
+/** Depth ties (two surfaces at one depth, drawn in another order) may differ: 0.01 %. */
+constexpr double kTiedPixelShare = 1e-4;
+
+fs::path freshDir() {
+    const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
+    const fs::path dir =
+            fs::path(FF_TEST_TMP_DIR) / (std::string(info->test_suite_name()) + "." + info->name());
+    fs::remove_all(dir);
+    fs::create_directories(dir);
+    return dir;
+}
+
+std::size_t differingPixels(const Image& a, const Image& b) {
+    EXPECT_EQ(a.width, b.width);
+    EXPECT_EQ(a.height, b.height);
+    std::size_t differing = 0;
+    for (std::size_t i = 0; i + 3 < a.rgba.size() && i + 3 < b.rgba.size(); i += 4)
+        if (a.rgba[i] != b.rgba[i] || a.rgba[i + 1] != b.rgba[i + 1] ||
+            a.rgba[i + 2] != b.rgba[i + 2] || a.rgba[i + 3] != b.rgba[i + 3])
+            ++differing;
+    return differing;
+}
+
+std::size_t allowedPixels(const Image& image) {
+    return static_cast<std::size_t>(kTiedPixelShare * image.width * image.height);
+}
+
+/** The surface of the box [lo, hi], each face an n x n grid of quads (12 n² triangles). */
+std::vector<storage::PackedTriangle> boxSurface(const glm::vec3& lo, const glm::vec3& hi, int n) {
+    std::vector<storage::PackedTriangle> triangles;
+    builder::SourceVertex v[4];
+    for (int axis = 0; axis < 3; ++axis) {
+        for (int side = 0; side < 2; ++side) {
+            const int u = (axis + 1) % 3;
+            const int w = (axis + 2) % 3;
+            for (int i = 0; i < n; ++i) {
+                for (int j = 0; j < n; ++j) {
+                    for (int k = 0; k < 4; ++k) {
+                        const int di = (k == 1 || k == 2) ? 1 : 0;
+                        const int dj = (k >= 2) ? 1 : 0;
+                        glm::vec3 p;
+                        p[axis] = side ? hi[axis] : lo[axis];
+                        p[u] = lo[u] +
+                               (hi[u] - lo[u]) * static_cast<float>(i + di) / static_cast<float>(n);
+                        p[w] = lo[w] +
+                               (hi[w] - lo[w]) * static_cast<float>(j + dj) / static_cast<float>(n);
+                        v[k].position = p;
+                        v[k].color =
+                                glm::vec4(0.3f + 0.2f * static_cast<float>(axis), 0.6f, 0.4f, 1.0f);
+                    }
+                    triangles.push_back(builder::packTriangle(v[0], v[1], v[2]));
+                    triangles.push_back(builder::packTriangle(v[0], v[2], v[3]));
+                }
+            }
+        }
+    }
+    return triangles;
+}
+
+constexpr int kStatueSubdivision = 8; // 768 triangles: worth a test
+constexpr std::uint64_t kWallTriangles = 12;
+constexpr std::uint64_t kStatueTriangles = 12 * kStatueSubdivision * kStatueSubdivision;
+
+/** A 10 x 10 wall at z = 0 and, behind it (z = -4), a statue 2 units wide. */
+fs::path buildWallAndStatue(const fs::path& dir) {
+    const fs::path file = dir / "wall.ffs";
+    builder::BuildOptions options;
+    options.memoryBudgetBytes = builder::SceneBuilder::kMinimumBudgetBytes;
+    auto scene = builder::SceneBuilder::create(file, options);
+    EXPECT_TRUE(scene.isOk()) << scene.status().toString();
+    auto wall = (*scene)->addPrototype("wall");
+    auto statue = (*scene)->addPrototype("statue");
+    EXPECT_TRUE((*scene)->addTriangles(*wall, boxSurface({-5, -5, -0.1f}, {5, 5, 0.1f}, 1)).isOk());
+    EXPECT_TRUE(
+            (*scene)->addTriangles(*statue, boxSurface({-1, -1, -1}, {1, 1, 1}, kStatueSubdivision))
+                    .isOk());
+    EXPECT_TRUE((*scene)->addInstance(*wall, glm::dmat4(1.0)).isOk());
+    glm::dmat4 behind(1.0);
+    behind[3] = glm::dvec4(0.0, 0.0, -4.0, 1.0);
+    EXPECT_TRUE((*scene)->addInstance(*statue, behind).isOk());
+    auto report = (*scene)->finish();
+    EXPECT_TRUE(report.isOk()) << report.status().toString();
+    return file;
+}
+
+fs::path buildGenerated(const fs::path& dir, const std::string& generator) {
+    const fs::path file = dir / "scene.ffs";
+    builder::BuildOptions options;
+    options.memoryBudgetBytes = builder::SceneBuilder::kMinimumBudgetBytes;
+    auto scene = builder::SceneBuilder::create(file, options);
+    EXPECT_TRUE(scene.isOk()) << scene.status().toString();
+    auto spec = builder::parseGeneratorSpec(generator);
+    EXPECT_TRUE(spec.isOk());
+    EXPECT_TRUE(builder::runGenerator(*spec, **scene).isOk());
+    EXPECT_TRUE((*scene)->finish().isOk());
+    return file;
+}
+
+class OcclusionCullingTest : public ::testing::Test {
+protected:
+    void SetUp() override {
+        auto context = OffscreenContext::create();
+        ASSERT_TRUE(context.isOk()) << context.status().toString();
+        mContext = std::move(*context);
+    }
+
+    /** A session per mode, so neither sees the other's history or GPU pages. */
+    void open(const fs::path& file, std::uint64_t cacheBytes = 0) {
+        SessionOptions options;
+        options.cacheBytes = cacheBytes;
+        auto culling = StreamingSession::open(file, options);
+        ASSERT_TRUE(culling.isOk()) << culling.status().toString();
+        auto plain = StreamingSession::open(file, options);
+        ASSERT_TRUE(plain.isOk()) << plain.status().toString();
+        mCulling = std::move(*culling);
+        mPlain = std::move(*plain);
+        mBounds = sceneBounds(mCulling->scene());
+    }
+
+    FrameContext frame(const Camera& camera, float epsilon, bool occlusion) const {
+        FrameContext context;
+        context.camera = camera;
+        context.camera.fitClipPlanes(mBounds);
+        context.selection.epsilonPixels = epsilon;
+        context.occlusion.enabled = occlusion;
+        return context;
+    }
+
+    std::unique_ptr<OffscreenContext> mContext;
+    std::unique_ptr<StreamingSession> mCulling;
+    std::unique_ptr<StreamingSession> mPlain;
+    Bounds mBounds;
+};
+
+TEST_F(OcclusionCullingTest, WhatIsBehindAWallNeverReachesGl) {
+    open(buildWallAndStatue(freshDir()));
+    const Camera front = Camera::lookAt({0, 0, 12}, {0, 0, 0}, {0, 1, 0}, 0.8f);
+    auto reference = mPlain->render(frame(front, 1.0f, false));
+    ASSERT_TRUE(reference.isOk()) << reference.status().toString();
+    ASSERT_EQ(reference->stats.trianglesDrawn, kWallTriangles + kStatueTriangles);
+    // The cold frame (no history) and the warm one both cull the statue.
+    for (int f = 0; f < 3; ++f) {
+        auto culled = mCulling->render(frame(front, 1.0f, true));
+        ASSERT_TRUE(culled.isOk()) << culled.status().toString();
+        SCOPED_TRACE("frame " + std::to_string(f));
+        EXPECT_EQ(culled->stats.trianglesDrawn, kWallTriangles);
+        EXPECT_GE(culled->stats.nodesOccluded, 1u);
+        EXPECT_GE(culled->stats.occlusionQueries, 1u);
+        EXPECT_EQ(culled->stats.cubesDrawn, 0u);
+        EXPECT_LE(differingPixels(culled->image, reference->image), allowedPixels(culled->image));
+    }
+}
+
+TEST_F(OcclusionCullingTest, HistoryNeverHidesWhatJustCameIntoView) {
+    open(buildWallAndStatue(freshDir()));
+    const Camera front = Camera::lookAt({0, 0, 12}, {0, 0, 0}, {0, 1, 0}, 0.8f);
+    // From the side, past the wall's edge: the statue is in plain view.
+    const Camera side = Camera::lookAt({14, 0, -4}, {0, 0, -4}, {0, 1, 0}, 0.8f);
+    for (int f = 0; f < 3; ++f)
+        ASSERT_TRUE(mCulling->render(frame(front, 1.0f, true)).isOk());
+    auto culled = mCulling->render(frame(side, 1.0f, true));
+    ASSERT_TRUE(culled.isOk()) << culled.status().toString();
+    auto reference = mPlain->render(frame(side, 1.0f, false));
+    ASSERT_TRUE(reference.isOk());
+    EXPECT_EQ(culled->stats.trianglesDrawn, reference->stats.trianglesDrawn);
+    EXPECT_EQ(culled->stats.trianglesDrawn, kWallTriangles + kStatueTriangles);
+    EXPECT_LE(differingPixels(culled->image, reference->image), allowedPixels(culled->image));
+}
+
+/** A walk with jumps: orbit steps, a teleport to the far side, a view from inside, and back. */
+std::vector<Camera> walkWithJumps(const Bounds& bounds) {
+    std::vector<Camera> cameras;
+    for (float azimuth : {0.0f, 6.0f, 12.0f, 190.0f, 196.0f})
+        cameras.push_back(Camera::orbit(bounds, 2.2f, azimuth, 20.0f, 0.8f));
+    cameras.push_back(Camera::orbit(bounds, 0.3f, 40.0f, 10.0f, 0.8f)); // inside
+    cameras.push_back(Camera::orbit(bounds, 1.4f, 80.0f, 50.0f, 0.8f));
+    cameras.push_back(Camera::orbit(bounds, 2.2f, 0.0f, 20.0f, 0.8f));
+    return cameras;
+}
+
+class NothingVisibleIsCulled
+    : public OcclusionCullingTest,
+      public ::testing::WithParamInterface<std::tuple<std::string, float>> {};
+
+TEST_P(NothingVisibleIsCulled, AlongAWalkWithJumps) {
+    const auto& [generator, epsilon] = GetParam();
+    open(buildGenerated(freshDir(), generator));
+    std::uint64_t occluded = 0;
+    std::uint64_t culledTriangles = 0;
+    std::uint64_t plainTriangles = 0;
+    const std::vector<Camera> walk = walkWithJumps(mBounds);
+    for (std::size_t i = 0; i < walk.size(); ++i) {
+        SCOPED_TRACE("camera " + std::to_string(i));
+        auto culled = mCulling->render(frame(walk[i], epsilon, true));
+        ASSERT_TRUE(culled.isOk()) << culled.status().toString();
+        auto reference = mPlain->render(frame(walk[i], epsilon, false));
+        ASSERT_TRUE(reference.isOk()) << reference.status().toString();
+        EXPECT_LE(differingPixels(culled->image, reference->image), allowedPixels(culled->image));
+        EXPECT_LE(culled->stats.trianglesDrawn, reference->stats.trianglesDrawn);
+        occluded += culled->stats.nodesOccluded;
+        culledTriangles += culled->stats.trianglesDrawn;
+        plainTriangles += reference->stats.trianglesDrawn;
+    }
+    // The comparison above means something only if occlusion culled something.
+    EXPECT_GT(occluded, 0u);
+    EXPECT_LT(culledTriangles, plainTriangles);
+}
+
+INSTANTIATE_TEST_SUITE_P(
+        Scenes,
+        NothingVisibleIsCulled,
+        ::testing::Combine(
+                ::testing::Values("molecule:spheres=2000", "forest:trees=64"),
+                ::testing::Values(0.0f, 1.0f)),
+        [](const auto& param) {
+            std::string name =
+                    std::get<0>(param.param).substr(0, std::get<0>(param.param).find(':'));
+            return name + (std::get<1>(param.param) == 0.0f ? "_eps0" : "_eps1");
+        });
+
+TEST_F(OcclusionCullingTest, AColdCacheIsNotWaitedFor) {
+    open(buildGenerated(freshDir(), "molecule:spheres=2000"), 64ull << 20);
+    const Camera camera = Camera::orbit(mBounds, 2.2f, 0.0f, 20.0f, 0.8f);
+    // The first frame has only the root page: it draws what it has, without waiting.
+    auto first = mCulling->render(frame(camera, 1.0f, true));
+    ASSERT_TRUE(first.isOk()) << first.status().toString();
+    EXPECT_GT(first->stats.pagesMissing, 0u);
+    EXPECT_FALSE(mCulling->lastFrame().stalled);
+    // Converged, it draws what the plain walk draws.
+    auto culled = mCulling->renderComplete(frame(camera, 1.0f, true));
+    ASSERT_TRUE(culled.isOk()) << culled.status().toString();
+    auto reference = mPlain->renderComplete(frame(camera, 1.0f, false));
+    ASSERT_TRUE(reference.isOk()) << reference.status().toString();
+    EXPECT_LE(differingPixels(culled->image, reference->image), allowedPixels(culled->image));
+    EXPECT_GT(culled->stats.nodesOccluded, 0u);
+}
+
+} // namespace
+} // namespace ff::runtime
