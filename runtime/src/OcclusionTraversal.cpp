@@ -106,7 +106,6 @@ struct OcclusionTraversal::Impl {
         Entry entry;
         std::uint32_t slot;
         float projected;
-        bool cube; ///< the ε rule draws it as its cube (pass 2)
     };
     struct Query {
         QueryTicket ticket;
@@ -410,14 +409,20 @@ void OcclusionTraversal::Impl::process(const Entry& entry) {
         ++stats->nodesCulled;
         return;
     }
+    const float projected =
+            detail::projectedPixels(node, t.localEye, t.metric, frame->camera, pixelScale);
+    if (detail::drawnAsCube(node, projected, frame->selection)) {
+        // Pass 2 draws it. A cube costs less to draw than to test and writes no depth: it is
+        // neither tested nor remembered, only seen (its parent stays visible).
+        cubesSeen = true;
+        markVisible(entry.parent);
+        return;
+    }
     const NodeKey key{t.instancePath, entry.ref};
     const auto slot = static_cast<std::uint32_t>(slots.size());
     slots.push_back({key, entry.parent, false});
-    const float projected =
-            detail::projectedPixels(node, t.localEye, t.metric, frame->camera, pixelScale);
-    const Tested visit{
-            entry, slot, projected, detail::drawnAsCube(node, projected, frame->selection)};
-    if (!visit.cube && !worthTesting(entry)) {
+    const Tested visit{entry, slot, projected};
+    if (!worthTesting(entry)) {
         // Too little below it to pay for a test: drawn whole, without tests or history.
         markVisible(slot);
         drawSubtree(node, entry.transform, entry.depth);
@@ -427,23 +432,13 @@ void OcclusionTraversal::Impl::process(const Entry& entry) {
     const bool prototypeRoot = node.level == 0 && t.prototypeTriangles > 0;
     const auto it = history.find(key);
     const bool visibleLastFrame = it != history.end() && it->second.lastVisible + 1 >= frameNumber;
-    const bool hiddenLastTest = it != history.end() && it->second.hidden;
-    // A cube costs less to draw than to test: one never seen is drawn, and tested late.
-    if (visibleLastFrame || prototypeRoot || (visit.cube && !hiddenLastTest))
+    if (visibleLastFrame || prototypeRoot)
         draw(visit);
     else
         queueForTest(visit);
 }
 
 void OcclusionTraversal::Impl::draw(const Tested& node) {
-    if (node.cube) {
-        // Pass 2 draws it. A cube does not write depth, but whether it is hidden is worth
-        // knowing: an inner node all of whose cubes are hidden is tested as a whole next frame.
-        cubesSeen = true;
-        markVisible(node.slot);
-        testLate(node.entry, node.slot);
-        return;
-    }
     refine(node.entry, node.slot, node.projected);
 }
 
@@ -466,10 +461,25 @@ bool OcclusionTraversal::Impl::testable(const Entry& entry, OcclusionBox& box) c
                                                                                 std::abs(hi.z)});
     lo -= glm::vec3(grow);
     hi += glm::vec3(grow);
+    // And by ε + 1 pixels on screen, at the box's nearest point: a cube below it may be drawn as
+    // a point sprite, a square that reaches past its cell's silhouette by up to ε pixels.
+    const float pixelsOut = frame->selection.epsilonPixels + 1.0f;
+    const float worldOut = frame->camera.orthographic
+                                   ? pixelsOut / pixelScale
+                                   : pixelsOut * std::max(entry.distance, frame->camera.zNear) /
+                                             pixelScale;
+    glm::vec3 axes[3];
+    for (int a = 0; a < 3; ++a) {
+        const glm::vec3 axis(t.matrix[a]);
+        const float length = glm::length(axis);
+        axes[a] = length > 0.0f ? axis * (worldOut / length) : glm::vec3(0.0f);
+    }
     const float nearLimit = frame->camera.zNear * 1.001f;
     for (int c = 0; c < 8; ++c) {
         const glm::vec3 local{(c & 1) ? hi.x : lo.x, (c & 2) ? hi.y : lo.y, (c & 4) ? hi.z : lo.z};
-        const glm::vec4 world = t.matrix * glm::vec4(local, 1.0f);
+        glm::vec4 world = t.matrix * glm::vec4(local, 1.0f);
+        for (int a = 0; a < 3; ++a)
+            world += glm::vec4((c >> a) & 1 ? axes[a] : -axes[a], 0.0f);
         box.corners[static_cast<std::size_t>(c)] = glm::vec3(world);
         // A box that reaches the near plane is clipped there: its samples say nothing.
         if (-(view * world).z < nearLimit)

@@ -28,7 +28,7 @@ struct FrameBudgets {
 struct OcclusionOptions {
     bool enabled = false;
     /** Occlusion tests a frame may issue; past it, untested nodes are drawn (Unknown). */
-    std::uint32_t queryBudget = 1024;
+    std::uint32_t queryBudget = 8192;
     /** Nodes waiting for a test are issued together once this many are queued (or when the
      *  walk has nothing else to do). */
     std::uint32_t batchNodes = 32;
