@@ -90,7 +90,8 @@ struct OcclusionTraversal::Impl {
     struct Entry {
         storage::NodeRecord record;
         storage::NodeRef ref;
-        float distance; ///< nearest world distance of its bounds from the eye
+        float distance;  ///< nearest world distance of its bounds from the eye
+        float projected; ///< the ε rule's measure, pixels
         std::uint32_t transform;
         std::uint32_t parent; ///< the slot of the node that queued it (kNone: the root)
         std::uint32_t depth;
@@ -383,10 +384,26 @@ void OcclusionTraversal::Impl::pushChild(
         std::uint32_t transform,
         std::uint32_t parent,
         std::uint32_t depth) {
+    // The frustum and the ε rule are decided here, not when the node leaves the queue: most
+    // nodes of a far field are culled or cubes, and those never enter it.
+    ++stats->nodesVisited;
     const Transform& t = transforms[transform];
+    if (!t.frustum.intersects(toVec3(record.boundsMin), toVec3(record.boundsMax))) {
+        ++stats->nodesCulled;
+        return;
+    }
+    const float projected =
+            detail::projectedPixels(record, t.localEye, t.metric, frame->camera, pixelScale);
+    if (detail::drawnAsCube(record, projected, frame->selection)) {
+        // Pass 2 draws it. A cube costs less to draw than to test and writes no depth: it is
+        // neither tested nor remembered, only seen (its parent stays visible).
+        cubesSeen = true;
+        markVisible(parent);
+        return;
+    }
     const float distance = t.metric.nearestDistance(
             toVec3(record.boundsMin), toVec3(record.boundsMax), t.localEye);
-    queue.push_back({record, ref, distance, transform, parent, depth});
+    queue.push_back({record, ref, distance, projected, transform, parent, depth});
     std::push_heap(queue.begin(), queue.end(), farther);
 }
 
@@ -402,22 +419,9 @@ void OcclusionTraversal::Impl::process(const Entry& entry) {
         reportCycle();
         return;
     }
-    ++stats->nodesVisited;
     const storage::NodeRecord& node = entry.record;
     const Transform& t = transforms[entry.transform];
-    if (!t.frustum.intersects(toVec3(node.boundsMin), toVec3(node.boundsMax))) {
-        ++stats->nodesCulled;
-        return;
-    }
-    const float projected =
-            detail::projectedPixels(node, t.localEye, t.metric, frame->camera, pixelScale);
-    if (detail::drawnAsCube(node, projected, frame->selection)) {
-        // Pass 2 draws it. A cube costs less to draw than to test and writes no depth: it is
-        // neither tested nor remembered, only seen (its parent stays visible).
-        cubesSeen = true;
-        markVisible(entry.parent);
-        return;
-    }
+    const float projected = entry.projected;
     const NodeKey key{t.instancePath, entry.ref};
     const auto slot = static_cast<std::uint32_t>(slots.size());
     slots.push_back({key, entry.parent, false});
@@ -464,10 +468,10 @@ bool OcclusionTraversal::Impl::testable(const Entry& entry, OcclusionBox& box) c
     // And by ε + 1 pixels on screen, at the box's nearest point: a cube below it may be drawn as
     // a point sprite, a square that reaches past its cell's silhouette by up to ε pixels.
     const float pixelsOut = frame->selection.epsilonPixels + 1.0f;
-    const float worldOut = frame->camera.orthographic
-                                   ? pixelsOut / pixelScale
-                                   : pixelsOut * std::max(entry.distance, frame->camera.zNear) /
-                                             pixelScale;
+    const float worldOut =
+            frame->camera.orthographic
+                    ? pixelsOut / pixelScale
+                    : pixelsOut * std::max(entry.distance, frame->camera.zNear) / pixelScale;
     glm::vec3 axes[3];
     for (int a = 0; a < 3; ++a) {
         const glm::vec3 axis(t.matrix[a]);
