@@ -36,6 +36,7 @@ const std::vector<generators::GeneratorEntry>& registry() {
             generators::moleculeGenerator(),
             generators::blindsGenerator(),
             generators::sphereGenerator(),
+            generators::cityGenerator(),
     };
     return kEntries;
 }

@@ -102,7 +102,7 @@ TEST(GeneratorCatalogTest, ListsEveryGeneratorWithDocumentedParameters) {
             EXPECT_GT(colon, 0u) << info.name << "." << key;
         }
     }
-    EXPECT_EQ(names, (std::set<std::string>{"forest", "terrain", "molecule", "blinds", "sphere"}));
+    EXPECT_EQ(names, (std::set<std::string>{"forest", "terrain", "molecule", "blinds", "sphere", "city"}));
 }
 
 TEST(GeneratorCatalogTest, CatalogDefaultsAreAccepted) {
@@ -215,7 +215,8 @@ INSTANTIATE_TEST_SUITE_P(
                         0x412069a3fb9e5606ull},
                 GoldenScene{
                         "blinds:slabs=20,tilt=30", 0x05b6126a4f525d95ull, 0xd6e975053c6d83d5ull},
-                GoldenScene{"sphere:triangles=2000,radius=3", 0xe25d855477140997ull, 0xd6e975053c6d83d5ull}),
+                GoldenScene{"sphere:triangles=2000,radius=3", 0xe25d855477140997ull, 0xd6e975053c6d83d5ull},
+                GoldenScene{"city:blocks=3,floors=2,items=2,seed=7", 0xd2009451b99c759dull, 0xefcbbc213fa8a5a4ull}),
         [](const ::testing::TestParamInfo<GoldenScene>& param) {
             const std::string spec = param.param.spec;
             return spec.substr(0, spec.find(':'));
@@ -508,6 +509,46 @@ TEST(SphereGeneratorTest, IsAClosedOutwardFacingSurfaceWithRadialNormals) {
     EXPECT_NEAR(size.x, 10.0f, 1e-3f);
     EXPECT_NEAR(size.y, 10.0f, 1e-3f);
     EXPECT_NEAR(size.z, 10.0f, 1e-3f);
+}
+
+
+// ---------------------------------------------------------------------------------------------
+
+TEST(CityGeneratorTest, TheDefaultCityIsAtLeastMeissnersSizeMostlyInside) {
+    CountingSink sink;
+    const GeneratorReport report = run("city", sink);
+    EXPECT_GE(report.triangles, 1'400'000u) << "Meißner et al.'s City: >= 1.4 M triangles";
+    expectReportMatchesSink(report, sink);
+    EXPECT_EQ(sink.zeroAreaTriangles, 0u);
+    EXPECT_EQ(sink.nonFiniteTriangles, 0u);
+    // Interiors hold most triangles: furniture prototypes are named so.
+    std::uint64_t furniture = 0;
+    for (const CountingSink::Instance& instance : sink.instances)
+        if (sink.prototypes[instance.prototype].name == "furniture")
+            furniture += sink.prototypes[instance.prototype].triangles;
+    EXPECT_GT(furniture, report.triangles * 8 / 10);
+    // Every piece is worth an occlusion test of its own (OcclusionOptions::minTestTriangles).
+    for (const CountingSink::PrototypeStats& prototype : sink.prototypes) {
+        if (prototype.name == "furniture") {
+            EXPECT_GE(prototype.triangles, 256u);
+        }
+    }
+}
+
+TEST(CityGeneratorTest, FlatAndInstancedHoldTheSameTriangles) {
+    CountingSink instanced;
+    CountingSink flat;
+    const GeneratorReport a = run("city:blocks=4,seed=3", instanced);
+    const GeneratorReport b = run("city:blocks=4,seed=3,instanced=0", flat);
+    EXPECT_EQ(a.triangles, b.triangles);
+    EXPECT_EQ(flat.prototypes.size(), 1u);
+    EXPECT_EQ(flat.instances.size(), 1u);
+    EXPECT_GT(instanced.instances.size(), 16u);
+    // The flat city spans the grid: 4 blocks of 20 units, buildings 12 wide on a ground plane.
+    const CountingSink::PrototypeStats& city = flat.prototypes[0];
+    EXPECT_NEAR(city.boundsMax.x - city.boundsMin.x, 80.0f, 1e-3f);
+    EXPECT_NEAR(city.boundsMin.y, -0.2f, 1e-4f);
+    EXPECT_LE(city.boundsMax.y, 4 * 3.0f + 1e-3f);
 }
 
 } // namespace

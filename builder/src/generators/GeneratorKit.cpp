@@ -200,4 +200,43 @@ glm::mat4 makeTransform(const glm::vec3& translation, double yawTurns, float sca
     return m;
 }
 
+Box axisBox(const glm::vec3& lo, const glm::vec3& hi) noexcept {
+    const glm::vec3 half = 0.5f * (hi - lo);
+    return {0.5f * (lo + hi), {glm::vec3(1, 0, 0), glm::vec3(0, 1, 0), glm::vec3(0, 0, 1)}, {half.x, half.y, half.z}};
+}
+
+Status emitBox(const Box& box, const std::array<std::uint32_t, 3>& segments, const glm::vec4& color, TriangleBatcher& out) {
+    for (int a = 0; a < 3; ++a) {
+        const auto ia = static_cast<std::size_t>(a);
+        const auto iu = static_cast<std::size_t>((a + 1) % 3);
+        const auto iv = static_cast<std::size_t>((a + 2) % 3);
+        for (const float side : {1.0f, -1.0f}) {
+            const glm::vec3 normal = side * box.axis[ia];
+            // u x v must equal the outward normal for counter-clockwise corners.
+            const glm::vec3 u = (side > 0.0f ? box.axis[iu] : box.axis[iv]) *
+                                (side > 0.0f ? box.half[iu] : box.half[iv]);
+            const glm::vec3 v = (side > 0.0f ? box.axis[iv] : box.axis[iu]) *
+                                (side > 0.0f ? box.half[iv] : box.half[iu]);
+            const std::uint32_t nu = side > 0.0f ? segments[iu] : segments[iv];
+            const std::uint32_t nv = side > 0.0f ? segments[iv] : segments[iu];
+            const glm::vec3 faceCenter = box.center + normal * box.half[ia];
+            // Grid coordinates -1..1; with one segment these are exactly -u-v, +u-v, ...
+            auto corner = [&](std::uint32_t i, std::uint32_t j) {
+                const float fu = 2.0f * static_cast<float>(i) / static_cast<float>(nu) - 1.0f;
+                const float fv = 2.0f * static_cast<float>(j) / static_cast<float>(nv) - 1.0f;
+                return SourceVertex{faceCenter + fu * u + fv * v, normal, color};
+            };
+            for (std::uint32_t j = 0; j < nv; ++j) {
+                for (std::uint32_t i = 0; i < nu; ++i) {
+                    const std::array<SourceVertex, 4> quad = {
+                            corner(i, j), corner(i + 1, j), corner(i + 1, j + 1), corner(i, j + 1)};
+                    FF_RETURN_IF_ERROR(out.add(quad[0], quad[1], quad[2]));
+                    FF_RETURN_IF_ERROR(out.add(quad[0], quad[2], quad[3]));
+                }
+            }
+        }
+    }
+    return Status::ok();
+}
+
 } // namespace ff::builder::generators

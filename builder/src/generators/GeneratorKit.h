@@ -16,6 +16,7 @@
 
 #include <glm/glm.hpp>
 
+#include <array>
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
@@ -173,6 +174,24 @@ private:
     std::uint64_t mSent = 0;
 };
 
+/** An oriented box: centre, orthonormal right-handed axes, half extents. */
+struct Box {
+    glm::vec3 center;
+    std::array<glm::vec3, 3> axis;
+    std::array<float, 3> half;
+};
+
+/** An axis-aligned box from its corners. */
+Box axisBox(const glm::vec3& lo, const glm::vec3& hi) noexcept;
+
+/** A box's six outward-facing faces, each a grid of segments[u] x segments[v] quads of two
+ *  triangles (u, v the face's two other axes), flat normals: 4 (xy + yz + zx) triangles. */
+[[nodiscard]] Status emitBox(
+        const Box& box,
+        const std::array<std::uint32_t, 3>& segments,
+        const glm::vec4& color,
+        TriangleBatcher& out);
+
 /** Flushes `out` and reports a scene of that one prototype drawn once (the terrain, the blinds,
  *  the sphere); the caller adds its instance. */
 [[nodiscard]] Result<GeneratorReport> flushSingleMesh(TriangleBatcher& out);
@@ -193,5 +212,6 @@ GeneratorEntry terrainGenerator();
 GeneratorEntry moleculeGenerator();
 GeneratorEntry blindsGenerator();
 GeneratorEntry sphereGenerator();
+GeneratorEntry cityGenerator();
 
 } // namespace ff::builder::generators

@@ -47,6 +47,7 @@ struct GeneratorReport {
  *  - molecule:spheres=N, seed  — spheres of a few element prototypes, instanced
  *  - blinds:slabs=N            — closely spaced parallel thin slabs in one prototype
  *  - sphere:triangles=N,radius — one large smooth closed surface (latitude-longitude grid)
+ *  - city:blocks=N,floors,items,instanced — closed furnished buildings along streets (occlusion)
  */
 [[nodiscard]] Result<GeneratorReport> runGenerator(const GeneratorSpec& spec, ISceneSink& sink);
 
