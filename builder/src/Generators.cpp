@@ -37,6 +37,7 @@ const std::vector<generators::GeneratorEntry>& registry() {
             generators::blindsGenerator(),
             generators::sphereGenerator(),
             generators::cityGenerator(),
+            generators::cathedralGenerator(),
     };
     return kEntries;
 }

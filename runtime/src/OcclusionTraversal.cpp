@@ -154,6 +154,8 @@ struct OcclusionTraversal::Impl {
     /** Whether enough lies below the node to pay for a test (OcclusionOptions::minTestTriangles).
      */
     bool worthTesting(const Entry& entry) const;
+    /** Triangles below the node, estimated from its prototype's count and its level. */
+    std::uint64_t estimatedTriangles(const Entry& entry) const;
     void reportCycle();
     void queueForTest(const Tested& node);
     void issueQueued();
@@ -489,7 +491,27 @@ bool OcclusionTraversal::Impl::testable(const Entry& entry, OcclusionBox& box) c
         if (-(view * world).z < nearLimit)
             return false;
     }
-    return true;
+    // The tester draws front faces only, counter-clockwise seen from outside: a mirroring
+    // transform turns the corners' order around, so swap them back along x.
+    if (glm::determinant(glm::mat3(t.matrix)) < 0.0f)
+        for (std::size_t c = 0; c < 8; c += 2)
+            std::swap(box.corners[c], box.corners[c + 1]);
+    // A test rasterises its box: one that covers more pixels than the triangles it may save
+    // are worth costs more than it can gain (its screen rectangle bounds what it covers).
+    glm::vec2 lo2(INFINITY);
+    glm::vec2 hi2(-INFINITY);
+    for (const glm::vec3& corner : box.corners) {
+        const glm::vec4 clip = viewProjection * glm::vec4(corner, 1.0f);
+        const glm::vec2 ndc = glm::vec2(clip) / clip.w;
+        lo2 = glm::min(lo2, ndc);
+        hi2 = glm::max(hi2, ndc);
+    }
+    lo2 = glm::clamp(lo2, glm::vec2(-1.0f), glm::vec2(1.0f));
+    hi2 = glm::clamp(hi2, glm::vec2(-1.0f), glm::vec2(1.0f));
+    const glm::vec2 pixels = 0.5f * (hi2 - lo2) * glm::vec2(frame->width, frame->height);
+    const double area = static_cast<double>(pixels.x) * static_cast<double>(pixels.y);
+    return area <= static_cast<double>(estimatedTriangles(entry)) *
+                           static_cast<double>(frame->occlusion.testPixelsPerTriangle);
 }
 
 QueryTicket OcclusionTraversal::Impl::issue(std::span<const OcclusionBox> group) {
@@ -746,20 +768,23 @@ void OcclusionTraversal::Impl::drawSubtree(
             });
 }
 
-bool OcclusionTraversal::Impl::worthTesting(const Entry& entry) const {
+std::uint64_t OcclusionTraversal::Impl::estimatedTriangles(const Entry& entry) const {
     const storage::NodeRecord& node = entry.record;
-    const std::uint64_t least = frame->occlusion.minTestTriangles;
     if (!detail::isCell(node)) {
         const storage::InstanceRecord& instance = scene.instances()[node.geometryPage];
-        return scene.prototypes()[instance.prototype].triangleCount >= least;
+        return scene.prototypes()[instance.prototype].triangleCount;
     }
     const std::uint64_t prototypeTriangles = transforms[entry.transform].prototypeTriangles;
-    if (prototypeTriangles == 0)
-        return true; // the instance level: its cells hold whole instances
+    if (prototypeTriangles == 0) // the instance level: its cells hold whole instances
+        return std::numeric_limits<std::uint64_t>::max() / 1024;
     // What lies below a node of a prototype's hierarchy, as if its triangles were a surface
     // split evenly four ways a level (a volume splits eight ways: this errs towards testing).
     const unsigned shift = std::min(2u * node.level, 62u);
-    return (prototypeTriangles >> shift) >= least;
+    return prototypeTriangles >> shift;
+}
+
+bool OcclusionTraversal::Impl::worthTesting(const Entry& entry) const {
+    return estimatedTriangles(entry) >= frame->occlusion.minTestTriangles;
 }
 
 void OcclusionTraversal::Impl::reportCycle() {

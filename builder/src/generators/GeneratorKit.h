@@ -213,5 +213,6 @@ GeneratorEntry moleculeGenerator();
 GeneratorEntry blindsGenerator();
 GeneratorEntry sphereGenerator();
 GeneratorEntry cityGenerator();
+GeneratorEntry cathedralGenerator();
 
 } // namespace ff::builder::generators

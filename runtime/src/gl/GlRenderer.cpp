@@ -11,6 +11,7 @@
 
 #include <glm/gtc/type_ptr.hpp>
 
+#include <array>
 #include <chrono>
 #include <initializer_list>
 #include <cstddef>
@@ -82,9 +83,18 @@ struct Renderer::Impl {
     float framePixelScale = 1.0f;
     std::uint32_t uploadLimit = 0;              ///< FrameBudgets::gpuUploadsPerFrame
     std::unordered_set<std::uint64_t> admitted; ///< pages not in the arena admitted this frame
-    // Per-batch buffers.
-    GLuint transforms = 0, normalMatrices = 0, localEyes = 0, iota = 0, indirect = 0, cubes = 0;
-    GLsizeiptr transformsCap = 0, normalsCap = 0, eyesCap = 0, iotaCap = 0, indirectCap = 0, cubesCap = 0;
+    // Per-batch buffers, a ring of them: rewriting a buffer the GPU may still be reading (the
+    // batch before, when an occlusion query flushed it) would wait for that batch to finish.
+    struct BatchBuffers {
+        GLuint transforms = 0, normalMatrices = 0, localEyes = 0, indirect = 0, cubes = 0;
+        GLsizeiptr transformsCap = 0, normalsCap = 0, eyesCap = 0, indirectCap = 0, cubesCap = 0;
+    };
+    static constexpr std::size_t kBatchBufferSets = 4;
+    std::array<BatchBuffers, kBatchBufferSets> ring;
+    std::size_t ringSlot = 0;
+    BatchBuffers& current() { return ring[ringSlot]; }
+    GLuint iota = 0;
+    GLsizeiptr iotaCap = 0;
     std::vector<IndirectCommand> commands;
     std::vector<glm::mat4> normalScratch;
     std::vector<glm::vec4> eyeScratch;
@@ -108,8 +118,12 @@ struct Renderer::Impl {
 };
 
 Renderer::Impl::~Impl() {
-    const GLuint buffers[] = {arena, transforms, normalMatrices, localEyes, iota, indirect, cubes};
-    glDeleteBuffers(7, buffers);
+    const GLuint buffers[] = {arena, iota};
+    glDeleteBuffers(2, buffers);
+    for (const BatchBuffers& set : ring) {
+        const GLuint perBatch[] = {set.transforms, set.normalMatrices, set.localEyes, set.indirect, set.cubes};
+        glDeleteBuffers(5, perBatch);
+    }
     const GLuint vaos[] = {geometryVao, cubeVao};
     glDeleteVertexArrays(2, vaos);
     glDeleteProgram(geometryProgram);
@@ -148,15 +162,19 @@ Result<std::unique_ptr<Renderer>> Renderer::create(const storage::SceneFile& sce
     for (std::uint32_t s = impl->slotCount; s-- > 0;)
         impl->freeSlots.push_back(s);
 
-    GLuint buffers[7];
-    glGenBuffers(7, buffers);
+    GLuint buffers[2];
+    glGenBuffers(2, buffers);
     impl->arena = buffers[0];
-    impl->transforms = buffers[1];
-    impl->normalMatrices = buffers[2];
-    impl->localEyes = buffers[3];
-    impl->iota = buffers[4];
-    impl->indirect = buffers[5];
-    impl->cubes = buffers[6];
+    impl->iota = buffers[1];
+    for (Impl::BatchBuffers& set : impl->ring) {
+        GLuint perBatch[5];
+        glGenBuffers(5, perBatch);
+        set.transforms = perBatch[0];
+        set.normalMatrices = perBatch[1];
+        set.localEyes = perBatch[2];
+        set.indirect = perBatch[3];
+        set.cubes = perBatch[4];
+    }
     bufferData(impl->arena, impl->slotBytes * impl->slotCount, nullptr, GL_DYNAMIC_DRAW);
 
     // Geometry: PackedVertex layout (20 bytes) straight from the pages.
@@ -181,7 +199,7 @@ Result<std::unique_ptr<Renderer>> Renderer::create(const storage::SceneFile& sce
     // Cubes: one CubeDraw per instance.
     glGenVertexArrays(1, &impl->cubeVao);
     glBindVertexArray(impl->cubeVao);
-    glBindVertexBuffer(0, impl->cubes, 0, sizeof(CubeDraw));
+    glBindVertexBuffer(0, impl->ring[0].cubes, 0, sizeof(CubeDraw)); // rebound per batch
     glVertexBindingDivisor(0, 1);
     glVertexAttribFormat(0, 3, GL_FLOAT, GL_FALSE, offsetof(CubeDraw, boxMin));
     glVertexAttribFormat(1, 3, GL_FLOAT, GL_FALSE, offsetof(CubeDraw, boxMax));
@@ -281,8 +299,9 @@ void Renderer::Impl::drawBatch(const glm::mat4& viewProjection) {
     if (commands.empty())
         return;
     const auto bytes = static_cast<GLsizeiptr>(commands.size() * sizeof(IndirectCommand));
-    ensureCapacity(indirect, indirectCap, bytes);
-    bufferSubData(indirect, 0, bytes, commands.data());
+    BatchBuffers& set = current();
+    ensureCapacity(set.indirect, set.indirectCap, bytes);
+    bufferSubData(set.indirect, 0, bytes, commands.data());
     glUseProgram(geometryProgram);
     glUniformMatrix4fv(glGetUniformLocation(geometryProgram, "uViewProjection"), 1, GL_FALSE, glm::value_ptr(viewProjection));
     glUniform3f(glGetUniformLocation(geometryProgram, "uLightDirection"), storage::kLightDirection[0],
@@ -290,7 +309,7 @@ void Renderer::Impl::drawBatch(const glm::mat4& viewProjection) {
     glUniform1f(glGetUniformLocation(geometryProgram, "uAmbient"), storage::kAmbient);
     glUniform1f(glGetUniformLocation(geometryProgram, "uDiffuse"), storage::kDiffuse);
     glBindVertexArray(geometryVao);
-    glBindBuffer(GL_DRAW_INDIRECT_BUFFER, indirect);
+    glBindBuffer(GL_DRAW_INDIRECT_BUFFER, set.indirect);
     glMultiDrawArraysIndirect(GL_TRIANGLES, nullptr, static_cast<GLsizei>(commands.size()), 0);
     commands.clear();
     ++batch;
@@ -318,12 +337,14 @@ void Renderer::Impl::drawCubes(const DrawList& list, const glm::mat4& viewProjec
     if (list.cubes.empty())
         return;
     const auto bytes = static_cast<GLsizeiptr>(list.cubes.size() * sizeof(CubeDraw));
-    ensureCapacity(cubes, cubesCap, bytes);
-    bufferSubData(cubes, 0, bytes, list.cubes.data());
+    BatchBuffers& set = current();
+    ensureCapacity(set.cubes, set.cubesCap, bytes);
+    bufferSubData(set.cubes, 0, bytes, list.cubes.data());
     const GLuint program = list.cubesAsPoints ? cubePointProgram : cubeProgram;
     glUseProgram(program);
     glUniformMatrix4fv(glGetUniformLocation(program, "uViewProjection"), 1, GL_FALSE, glm::value_ptr(viewProjection));
     glBindVertexArray(cubeVao);
+    glBindVertexBuffer(0, set.cubes, 0, sizeof(CubeDraw));
     glEnable(GL_BLEND);
     glBlendFunc(GL_ONE, GL_ONE_MINUS_SRC_ALPHA); // premultiplied "over", back to front
     glDepthMask(GL_FALSE);
@@ -348,12 +369,13 @@ void Renderer::Impl::uploadTransforms(const DrawList& list) {
         normalScratch[i] = glm::mat4(glm::transpose(glm::inverse(glm::mat3(list.transforms[i]))));
         eyeScratch[i] = glm::vec4(list.localEyes[i], 1.0f);
     }
-    ensureCapacity(transforms, transformsCap, transformCount * static_cast<GLsizeiptr>(sizeof(glm::mat4)));
-    ensureCapacity(normalMatrices, normalsCap, transformCount * static_cast<GLsizeiptr>(sizeof(glm::mat4)));
-    ensureCapacity(localEyes, eyesCap, transformCount * static_cast<GLsizeiptr>(sizeof(glm::vec4)));
-    bufferSubData(transforms, 0, transformCount * static_cast<GLsizeiptr>(sizeof(glm::mat4)), list.transforms.data());
-    bufferSubData(normalMatrices, 0, transformCount * static_cast<GLsizeiptr>(sizeof(glm::mat4)), normalScratch.data());
-    bufferSubData(localEyes, 0, transformCount * static_cast<GLsizeiptr>(sizeof(glm::vec4)), eyeScratch.data());
+    BatchBuffers& set = current();
+    ensureCapacity(set.transforms, set.transformsCap, transformCount * static_cast<GLsizeiptr>(sizeof(glm::mat4)));
+    ensureCapacity(set.normalMatrices, set.normalsCap, transformCount * static_cast<GLsizeiptr>(sizeof(glm::mat4)));
+    ensureCapacity(set.localEyes, set.eyesCap, transformCount * static_cast<GLsizeiptr>(sizeof(glm::vec4)));
+    bufferSubData(set.transforms, 0, transformCount * static_cast<GLsizeiptr>(sizeof(glm::mat4)), list.transforms.data());
+    bufferSubData(set.normalMatrices, 0, transformCount * static_cast<GLsizeiptr>(sizeof(glm::mat4)), normalScratch.data());
+    bufferSubData(set.localEyes, 0, transformCount * static_cast<GLsizeiptr>(sizeof(glm::vec4)), eyeScratch.data());
     if (iotaCap < transformCount * static_cast<GLsizeiptr>(sizeof(GLuint))) {
         std::vector<GLuint> values(static_cast<std::size_t>(std::max<GLsizeiptr>(transformCount * 2, 1024)));
         for (std::size_t i = 0; i < values.size(); ++i)
@@ -364,9 +386,9 @@ void Renderer::Impl::uploadTransforms(const DrawList& list) {
         glBindVertexBuffer(1, iota, 0, sizeof(GLuint));
         glBindVertexArray(0);
     }
-    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 0, transforms);
-    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 1, normalMatrices);
-    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 2, localEyes);
+    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 0, set.transforms);
+    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 1, set.normalMatrices);
+    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 2, set.localEyes);
 }
 
 Status Renderer::beginFrame(const FrameContext& frame, FrameOutput output, FrameStats& stats) {
@@ -412,6 +434,7 @@ Status Renderer::beginFrame(const FrameContext& frame, FrameOutput output, Frame
 Status Renderer::draw(const DrawList& batch, FrameStats& stats) {
     Impl& s = *mImpl;
     const auto start = std::chrono::steady_clock::now();
+    s.ringSlot = (s.ringSlot + 1) % Impl::kBatchBufferSets;
     s.uploadTransforms(batch);
     FF_RETURN_IF_ERROR(s.drawGeometry(batch, s.frameViewProjection, stats));
     s.drawCubes(batch, s.frameViewProjection, s.framePixelScale);

@@ -12,7 +12,8 @@ namespace ff::runtime::gl {
 namespace {
 
 // Up to kBoxesPerDraw boxes of 36 vertices (12 triangles) each, from eight corners a box; corner
-// i has bit 0 = x max, bit 1 = y max, bit 2 = z max, as OcclusionBox says.
+// i has bit 0 = x max, bit 1 = y max, bit 2 = z max, as OcclusionBox says. Every triangle is
+// counter-clockwise seen from outside the box.
 constexpr const char* kBoxVertexShader = R"(#version 450 core
 uniform mat4 uViewProjection;
 uniform vec3 uCorners[64];
@@ -81,6 +82,9 @@ QueryTicket OcclusionQueries::issue(std::span<const OcclusionBox> group) {
     glColorMask(GL_FALSE, GL_FALSE, GL_FALSE, GL_FALSE);
     glDepthMask(GL_FALSE);
     glDepthFunc(GL_LEQUAL);
+    glEnable(GL_CULL_FACE); // a box not holding the eye shows its silhouette with front faces
+    glCullFace(GL_BACK);
+    glFrontFace(GL_CCW);
     glBeginQuery(mTarget, mPool[ticket]);
     for (std::size_t first = 0; first < group.size(); first += kBoxesPerDraw) {
         const std::size_t count = std::min(kBoxesPerDraw, group.size() - first);
@@ -94,6 +98,7 @@ QueryTicket OcclusionQueries::issue(std::span<const OcclusionBox> group) {
         glDrawArrays(GL_TRIANGLES, 0, static_cast<GLsizei>(36 * count));
     }
     glEndQuery(mTarget);
+    glDisable(GL_CULL_FACE);
     glDepthFunc(GL_LESS);
     glDepthMask(GL_TRUE);
     glColorMask(GL_TRUE, GL_TRUE, GL_TRUE, GL_TRUE);

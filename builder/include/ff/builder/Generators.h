@@ -48,6 +48,7 @@ struct GeneratorReport {
  *  - blinds:slabs=N            — closely spaced parallel thin slabs in one prototype
  *  - sphere:triangles=N,radius — one large smooth closed surface (latitude-longitude grid)
  *  - city:blocks=N,floors,items,instanced — closed furnished buildings along streets (occlusion)
+ *  - cathedral:bays=N,detail — a basilica seen from inside (low occlusion)
  */
 [[nodiscard]] Result<GeneratorReport> runGenerator(const GeneratorSpec& spec, ISceneSink& sink);
 

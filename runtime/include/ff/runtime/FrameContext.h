@@ -42,6 +42,10 @@ struct OcclusionOptions {
      *  triangles shared out by level); smaller subtrees are drawn without a test, which costs
      *  less than testing them. */
     std::uint32_t minTestTriangles = 256;
+    /** A test rasterises its box: one whose screen rectangle covers more than this many pixels
+     *  per triangle it could save is not made (the node is drawn). On llvmpipe a triangle costs
+     *  about as much as 20 pixels of a depth-only box (docs/methods.md §9). */
+    float testPixelsPerTriangle = 20.0f;
 };
 
 /**

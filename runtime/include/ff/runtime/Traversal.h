@@ -76,7 +76,8 @@ public:
 };
 
 /** A box to test, as its eight corners in world space (corner i has bit 0 = x max, bit 1 = y
- *  max, bit 2 = z max in the box's own frame, so a transformed box stays exact). */
+ *  max, bit 2 = z max in the box's own frame, so a transformed box stays exact), in a
+ *  right-handed order: a tester may draw front faces only. */
 struct OcclusionBox {
     std::array<glm::vec3, 8> corners;
 };
