@@ -40,11 +40,20 @@ struct PathParams {
     CacheSpec cache = {.cacheMb = 0};
 };
 
-Result<runtime::CameraPath> makePath(const PathSpec& p, const runtime::Bounds& bounds) {
+/** The path in the scene file's frame (where sessions draw). */
+Result<runtime::CameraPath> makePath(const PathSpec& p, const storage::SceneFile& scene) {
+    const runtime::Bounds bounds = runtime::sceneBounds(scene);
     if (p.generator == "flythrough")
         return runtime::makeFlythroughPath(bounds, p.options);
     if (p.generator == "teleports")
         return runtime::makeTeleportPath(bounds, p.options);
+    if (p.generator == "walk") {
+        runtime::PathGeneratorOptions options = p.options;
+        for (auto& leg : options.legs) // world coordinates into the file's frame
+            for (glm::dvec3& point : leg)
+                point -= runtime::sceneOrigin(scene);
+        return runtime::makeWalkPath(bounds, options);
+    }
     return runtime::makeOrbitPath(bounds, p.options);
 }
 
@@ -67,7 +76,7 @@ Status runPath(const PathParams& p, const Scenario& scenario, const BenchOptions
     // The reference of every frame: all geometry, every page mapped.
     FF_ASSIGN_OR_RETURN(auto referenceSession, runtime::StreamingSession::open(scenePath));
     const runtime::Bounds bounds = runtime::sceneBounds(referenceSession->scene());
-    auto path = makePath(p.path, bounds);
+    auto path = makePath(p.path, referenceSession->scene());
     if (!path)
         return path.status().withContext(scenario.where() + ": path");
     const std::int64_t frames = path->frameCount();
@@ -120,18 +129,35 @@ Status runPath(const PathParams& p, const Scenario& scenario, const BenchOptions
              "p50_ms",
              "p99_ms",
              "debt_frames",
-             "bytes_read"});
+             "bytes_read",
+             // Occlusion culling (issue 15): Meißner et al.'s Table 1 per method, means over the path.
+             "occlusion",
+             "coherence",
+             "mean_ms",
+             "mean_select_ms",
+             "mean_occlusion_ms",
+             "mean_draw_ms",
+             "mean_triangles",
+             "mean_render_rate",
+             "mean_queries",
+             "mean_queries_waited",
+             "mean_nodes_occluded"});
     for (const MethodSpec& method : p.methods) {
         std::fprintf(stderr, "%s: method %s\n", scenario.name.c_str(), method.label.c_str());
         FF_ASSIGN_OR_RETURN(std::unique_ptr<runtime::StreamingSession> session, openSession(p, scenePath));
         runtime::TemporalInstabilityAccumulator accumulator;
         std::vector<double> instability, psnr, frameMs;
+        struct Means {
+            double select = 0, occlusion = 0, draw = 0, triangles = 0, renderRate = 0, queries = 0,
+                   waited = 0, occluded = 0;
+        } sums;
         std::uint64_t debtFrames = 0;
         runtime::Image previous;
         for (std::int64_t f = 0; f < frames; ++f) {
             if (session->streams() && p.cache.prefetchFrames > 0)
                 session->setPrefetchCamera(cameraAt(f + p.cache.prefetchFrames));
             runtime::FrameContext frameContext = frameAt(cameraAt(f), method.selection, width, height);
+            frameContext.occlusion = method.occlusion;
             frameContext.timeSeconds = path->frameTime(f);
             frameContext.budgets.pageInstallsPerFrame = static_cast<std::size_t>(p.cache.uploadsPerFrame);
             FF_ASSIGN_OR_RETURN(runtime::Frame frame, session->render(frameContext));
@@ -157,6 +183,14 @@ Status runPath(const PathParams& p, const Scenario& scenario, const BenchOptions
             // readback or the prefetch walk), so the percentiles stay comparable.
             frameMs.push_back(telemetry.pumpMs + frame.stats.totalMs);
             psnr.push_back(color.psnrSrgb);
+            sums.select += frame.stats.selectMs;
+            sums.occlusion += frame.stats.occlusionMs;
+            sums.draw += frame.stats.drawMs;
+            sums.triangles += static_cast<double>(frame.stats.trianglesDrawn);
+            sums.renderRate += telemetry.renderRatePercent;
+            sums.queries += static_cast<double>(frame.stats.occlusionQueries);
+            sums.waited += static_cast<double>(frame.stats.queriesWaited);
+            sums.occluded += static_cast<double>(frame.stats.nodesOccluded);
             debtFrames += frame.stats.nodesDeferred > 0 ? 1 : 0;
             std::vector<std::string> row = {method.label};
             for (std::string& cell : runtime::telemetryCsvCells(telemetry))
@@ -166,6 +200,13 @@ Status runPath(const PathParams& p, const Scenario& scenario, const BenchOptions
             previous = std::move(frame.image);
         }
         const runtime::TemporalInstability total = accumulator.result();
+        const auto n = static_cast<double>(frames);
+        const auto mean = [](const std::vector<double>& v) {
+            double sum = 0.0;
+            for (const double x : v)
+                sum += x;
+            return v.empty() ? 0.0 : sum / static_cast<double>(v.size());
+        };
         summary.addRow(
                 {method.label,
                  method.methodName(),
@@ -181,7 +222,18 @@ Status runPath(const PathParams& p, const Scenario& scenario, const BenchOptions
                  formatNumber(runtime::percentile(frameMs, 0.50), 3),
                  formatNumber(runtime::percentile(frameMs, 0.99), 3),
                  std::to_string(debtFrames),
-                 std::to_string(session->totals().bytesRead)});
+                 std::to_string(session->totals().bytesRead),
+                 method.occlusion.enabled ? "on" : "off",
+                 method.occlusion.coherent ? "on" : "off",
+                 formatNumber(mean(frameMs), 3),
+                 formatNumber(sums.select / n, 3),
+                 formatNumber(sums.occlusion / n, 3),
+                 formatNumber(sums.draw / n, 3),
+                 formatNumber(sums.triangles / n, 0),
+                 formatNumber(sums.renderRate / n, 4),
+                 formatNumber(sums.queries / n, 1),
+                 formatNumber(sums.waited / n, 1),
+                 formatNumber(sums.occluded / n, 1)});
     }
 
     const std::filesystem::path csv = options.outDir / (scenario.name + ".csv");

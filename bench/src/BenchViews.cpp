@@ -293,13 +293,11 @@ Status runViews(const ViewsParams& p, const Scenario& scenario, const BenchOptio
                     MethodSpec m = method;
                     if (setting)
                         FF_RETURN_IF_ERROR(setMethodKey(m, p.sweep.parameter, *setting));
+                    runtime::FrameContext frameContext = frameAt(*camera, m.selection, width, height);
+                    frameContext.occlusion = m.occlusion;
                     FF_ASSIGN_OR_RETURN(
                             const runtime::Frame frame,
-                            timeFrames(
-                                    *session,
-                                    frameAt(*camera, m.selection, width, height),
-                                    1,
-                                    options.timedFrames));
+                            timeFrames(*session, frameContext, 1, options.timedFrames));
                     FF_ASSIGN_OR_RETURN(
                             const runtime::ColorError color,
                             runtime::colorError(frame.image, reference.image));

@@ -55,6 +55,9 @@ std::vector<std::string> PathSpec::commandArgs(
                                      "--fov", sweepValueText(options.fovDegrees)};
     if (generator == "teleports")
         args.insert(args.end(), {"--teleports", std::to_string(options.teleports)});
+    if (generator == "walk")
+        args.insert(args.end(), {"--legs", runtime::formatWalkLegs(options.legs), "--look-ahead",
+                                 sweepValueText(options.legLookAhead)});
     return args;
 }
 
@@ -73,7 +76,25 @@ CacheSpec readCacheSpec(ScenarioReader& reader, CacheSpec fallback, std::int64_t
 PathSpec readPathSpec(ScenarioReader& reader, PathSpec fallback, std::int64_t minFrames) {
     PathSpec p = std::move(fallback);
     ScenarioReader path = reader.object("path");
-    p.generator = path.choice("generator", p.generator, {"orbit", "flythrough", "teleports"});
+    p.generator = path.choice("generator", p.generator, {"orbit", "flythrough", "teleports", "walk"});
+    if (const nlohmann::json* legs = path.raw("legs")) {
+        const auto isPoint = [](const nlohmann::json& v) {
+            return v.is_array() && v.size() == 3 && v[0].is_number() && v[1].is_number() && v[2].is_number();
+        };
+        p.options.legs.clear();
+        for (const nlohmann::json& leg : legs->is_array() ? *legs : nlohmann::json::array()) {
+            std::vector<glm::dvec3> points;
+            for (const nlohmann::json& point : leg.is_array() ? leg : nlohmann::json::array())
+                if (isPoint(point))
+                    points.emplace_back(point[0].get<double>(), point[1].get<double>(), point[2].get<double>());
+            if (points.size() < 2 || points.size() != leg.size())
+                path.fail("legs", "expected [[[x,y,z], [x,y,z], ...], ...]: legs of two points or more");
+            p.options.legs.push_back(std::move(points));
+        }
+    }
+    p.options.legLookAhead = path.number("look_ahead", p.options.legLookAhead);
+    if (p.generator == "walk" && p.options.legs.empty())
+        path.fail("legs", "a walk needs its legs, e.g. [[[0,1.7,100], [0,1.7,-100]]]");
     p.options.frames = path.integer("frames", p.options.frames);
     p.options.fps = path.number("fps", p.options.fps);
     const std::int64_t seed = path.integer("seed", static_cast<std::int64_t>(p.options.seed));
@@ -131,9 +152,17 @@ Status setMethodKey(MethodSpec& method, const std::string& key, const nlohmann::
         method.selection.maxCubeAnisotropy = value.get<float>();
         return Status::ok();
     }
+    if (key == "occlusion" || key == "coherence") {
+        if (!value.is_boolean())
+            return Status(ErrorCode::InvalidArgument, key + ": expected true or false, got " + value.dump());
+        (key == "occlusion" ? method.occlusion.enabled : method.occlusion.coherent) = value.get<bool>();
+        return Status::ok();
+    }
     return Status(
             ErrorCode::InvalidArgument,
-            "\"" + key + "\" is not a method key a sweep can vary (eps, cube_draw, cube_anisotropy)");
+            "\"" + key +
+                    "\" is not a method key a sweep can vary (eps, cube_draw, cube_anisotropy, occlusion, "
+                    "coherence)");
 }
 
 std::vector<MethodSpec> readMethods(ScenarioReader& reader) {

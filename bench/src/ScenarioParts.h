@@ -40,7 +40,7 @@ SceneSpec readSceneSpec(ScenarioReader& reader);
 
 /** "path": a camera path made by one of `farfield path`'s generators, fitted to the scene. */
 struct PathSpec {
-    std::string generator = "orbit"; ///< orbit, flythrough or teleports
+    std::string generator = "orbit"; ///< orbit, flythrough, teleports or walk (options.legs: world)
     runtime::PathGeneratorOptions options;
 
     /** `farfield path` arguments (after the executable) that write this path for `scene`. */
@@ -67,6 +67,7 @@ CacheSpec readCacheSpec(ScenarioReader& reader, CacheSpec fallback, std::int64_t
 struct MethodSpec {
     std::string label;
     runtime::SelectionOptions selection;
+    runtime::OcclusionOptions occlusion;
 
     bool isFull() const noexcept { return selection.method == runtime::Method::Full; }
     /** "full" / "hierarchical" */
@@ -76,7 +77,7 @@ struct MethodSpec {
 };
 
 /** Method keys a sweep may vary (the others, label and method, name what is swept). */
-inline constexpr const char* kSweepableMethodKeys[] = {"eps", "cube_draw", "cube_anisotropy"};
+inline constexpr const char* kSweepableMethodKeys[] = {"eps", "cube_draw", "cube_anisotropy", "occlusion", "coherence"};
 
 /** Reads "methods" (a non-empty array; labels unique); errors go to the reader. */
 std::vector<MethodSpec> readMethods(ScenarioReader& reader);

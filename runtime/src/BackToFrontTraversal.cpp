@@ -169,16 +169,17 @@ void BackToFrontTraversal::visit(
         ++mStats->nodesCulled;
         return;
     }
-    if (mServices->visibility.visibility({frame.instancePath, ref}) == Visibility::Occluded) {
-        ++mStats->nodesOccluded;
-        return;
-    }
 
     const SelectionOptions& options = mFrame->selection;
     const float projected = detail::projectedPixels(
             node, frame.localEye, frame.metric, mFrame->camera, mPixelScale);
     if (detail::drawnAsCube(node, projected, options)) {
         emitCube(node, ref, active);
+        return;
+    }
+    // A cube costs less to draw than to ask about; what is refined is skipped if Occluded.
+    if (mServices->visibility.visibility({frame.instancePath, ref}) == Visibility::Occluded) {
+        ++mStats->nodesOccluded;
         return;
     }
     const float priority = std::min(projected, kTopPriority) * options.priorityScale;

@@ -3,7 +3,9 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <locale>
 #include <numbers>
+#include <sstream>
 #include <string>
 #include <vector>
 
@@ -231,6 +233,110 @@ Result<CameraPath> makeTeleportPath(const Bounds& bounds, const PathGeneratorOpt
     }
     return CameraPath::create(
             std::move(keyframes), PathInterpolation::Linear, FrameSampling::rate(options.fps));
+}
+
+Result<CameraPath> makeWalkPath(const Bounds& bounds, const PathGeneratorOptions& options) {
+    FF_RETURN_IF_ERROR(fitBox(bounds, options).status());
+    std::vector<double> lengths;
+    double total = 0.0;
+    for (const std::vector<glm::dvec3>& leg : options.legs) {
+        if (leg.size() < 2)
+            return Status(ErrorCode::InvalidArgument, "every leg of a walk needs two points or more");
+        double length = 0.0;
+        for (std::size_t i = 1; i < leg.size(); ++i) {
+            for (int axis = 0; axis < 3; ++axis)
+                if (!std::isfinite(leg[i][axis]) || !std::isfinite(leg[i - 1][axis]))
+                    return Status(ErrorCode::InvalidArgument, "a walk's points must be finite");
+            length += glm::length(leg[i] - leg[i - 1]);
+        }
+        if (!(length > 0.0))
+            return Status(ErrorCode::InvalidArgument, "a leg of a walk has no length");
+        lengths.push_back(length);
+        total += length;
+    }
+    if (lengths.empty())
+        return Status(ErrorCode::InvalidArgument, "a walk needs at least one leg (--legs)");
+    const auto legCount = static_cast<std::int64_t>(lengths.size());
+    if (options.frames < 2 * legCount)
+        return Status(ErrorCode::InvalidArgument, "a walk needs at least 2 frames a leg");
+
+    // Frames shared out by length (2 at least a leg); each leg walked at constant speed, looking
+    // a little ahead along it; from one leg's end to the next leg's start is a jump.
+    std::vector<CameraKeyframe> keyframes;
+    std::int64_t frame = 0;
+    for (std::size_t l = 0; l < lengths.size(); ++l) {
+        const std::vector<glm::dvec3>& leg = options.legs[l];
+        const std::int64_t left = options.frames - frame;
+        const auto legsLeft = static_cast<std::int64_t>(lengths.size() - l);
+        const std::int64_t frames =
+                l + 1 == lengths.size()
+                        ? left
+                        : std::clamp<std::int64_t>(
+                                  static_cast<std::int64_t>(std::llround(static_cast<double>(options.frames) * lengths[l] / total)),
+                                  2,
+                                  left - 2 * (legsLeft - 1));
+        const auto pointAt = [&leg](double distance) {
+            for (std::size_t i = 1; i < leg.size(); ++i) {
+                const double piece = glm::length(leg[i] - leg[i - 1]);
+                if (distance <= piece || i + 1 == leg.size())
+                    return glm::mix(leg[i - 1], leg[i], piece > 0.0 ? std::clamp(distance / piece, 0.0, 1.0) : 0.0);
+                distance -= piece;
+            }
+            return leg.back();
+        };
+        const double ahead = std::min(options.legLookAhead, 0.5 * lengths[l]);
+        for (std::int64_t f = 0; f < frames; ++f) {
+            const double along = lengths[l] * static_cast<double>(f) / static_cast<double>(frames - 1);
+            const glm::dvec3 position = pointAt(along);
+            glm::dvec3 forward = pointAt(std::min(along + ahead, lengths[l])) - position;
+            if (!(glm::dot(forward, forward) > 0.0))
+                forward = leg.back() - leg[leg.size() - 2];
+            CameraKeyframe k = keyframe(frameTimeOf(frame + f, options), position, forward, options.fovDegrees);
+            if (f == 0)
+                k.name = "leg " + std::to_string(l);
+            keyframes.push_back(k);
+        }
+        frame += frames;
+    }
+    return CameraPath::create(std::move(keyframes), PathInterpolation::Linear, FrameSampling::rate(options.fps));
+}
+
+Result<std::vector<std::vector<glm::dvec3>>> parseWalkLegs(std::string_view text) {
+    std::vector<std::vector<glm::dvec3>> legs;
+    std::size_t start = 0;
+    while (start <= text.size()) {
+        const std::size_t end = std::min(text.find(';', start), text.size());
+        std::vector<glm::dvec3> leg;
+        std::istringstream points{std::string(text.substr(start, end - start))};
+        std::string point;
+        while (points >> point) {
+            glm::dvec3 p(0.0);
+            char comma1 = 0, comma2 = 0;
+            std::istringstream coordinates(point);
+            coordinates.imbue(std::locale::classic());
+            if (!(coordinates >> p.x >> comma1 >> p.y >> comma2 >> p.z) || comma1 != ',' || comma2 != ',' ||
+                !coordinates.eof())
+                return Status(ErrorCode::InvalidArgument, "walk point '" + point + "' is not x,y,z");
+            leg.push_back(p);
+        }
+        if (!leg.empty())
+            legs.push_back(std::move(leg));
+        start = end + 1;
+    }
+    return legs;
+}
+
+std::string formatWalkLegs(const std::vector<std::vector<glm::dvec3>>& legs) {
+    std::ostringstream out;
+    out.imbue(std::locale::classic());
+    out.precision(17);
+    for (std::size_t l = 0; l < legs.size(); ++l) {
+        if (l > 0)
+            out << "; ";
+        for (std::size_t i = 0; i < legs[l].size(); ++i)
+            out << (i > 0 ? " " : "") << legs[l][i].x << ',' << legs[l][i].y << ',' << legs[l][i].z;
+    }
+    return out.str();
 }
 
 } // namespace ff::runtime

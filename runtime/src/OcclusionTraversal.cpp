@@ -38,10 +38,12 @@ double millisecondsSince(std::chrono::steady_clock::time_point start) {
 
 /** What the walk remembers of a node between frames. */
 struct History {
-    std::uint32_t lastSeen = 0;    ///< frame that last reached it
-    std::uint32_t lastVisible = 0; ///< frame that last drew something of it (0: never)
-    std::uint16_t hiddenTests = 0; ///< tests in a row that found it hidden
-    bool hidden = false;           ///< its last test found it hidden
+    std::uint32_t lastSeen = 0;      ///< frame that last reached it
+    std::uint32_t lastVisible = 0;   ///< frame that last drew something of it (0: never)
+    std::uint32_t cubesFrame = 0;    ///< frame whose cubes lay below it (pass 2 walks it)
+    std::uint32_t occludedFrame = 0; ///< frame whose test found it hidden (pass 2 skips it)
+    std::uint16_t hiddenTests = 0;   ///< tests in a row that found it hidden
+    bool hidden = false;             ///< its last test found it hidden
 };
 
 class HistoryVisibility final : public IVisibility {
@@ -59,17 +61,25 @@ private:
     const std::unordered_map<NodeKey, History, NodeKeyHash>& mHistory;
 };
 
-/** This frame's answers, for pass 2. */
+/** What pass 2 skips: the nodes this frame's tests found hidden, and those pass 1 walked whole
+ *  without meeting a cube (pass 2 draws cubes only: nothing there for it). */
 class FrameOccluded final : public IVisibility {
 public:
+    explicit FrameOccluded(const std::unordered_map<NodeKey, History, NodeKeyHash>& history)
+        : mHistory(history) {}
     [[nodiscard]] Visibility visibility(const NodeKey& key) const override {
-        return mOccluded.contains(key) ? Visibility::Occluded : Visibility::Unknown;
+        const auto it = mHistory.find(key);
+        if (it == mHistory.end() || it->second.lastSeen != mFrame)
+            return Visibility::Unknown; // pass 1 did not reach it (a cube, or below a drawn node)
+        const History& h = it->second;
+        return h.occludedFrame == mFrame || h.cubesFrame != mFrame ? Visibility::Occluded
+                                                                   : Visibility::Unknown;
     }
-    void clear() { mOccluded.clear(); }
-    void insert(const NodeKey& key) { mOccluded.insert(key); }
+    void startFrame(std::uint32_t frame) { mFrame = frame; }
 
 private:
-    std::unordered_set<NodeKey, NodeKeyHash> mOccluded;
+    const std::unordered_map<NodeKey, History, NodeKeyHash>& mHistory;
+    std::uint32_t mFrame = 0;
 };
 
 } // namespace
@@ -101,6 +111,7 @@ struct OcclusionTraversal::Impl {
         NodeKey key;
         std::uint32_t parent;
         bool visible;
+        bool cubesBelow = false; ///< pass 2 has a cube to draw in its subtree
     };
     /** A node waiting for (or in) a test. */
     struct Tested {
@@ -122,7 +133,8 @@ struct OcclusionTraversal::Impl {
         : scene(sceneFile)
         , nodePages(sceneFile, pages)
         , cubes(sceneFile, pages)
-        , historyView(history) {
+        , historyView(history)
+        , occluded(history) {
         cubes.setCubesOnly(true);
     }
 
@@ -172,7 +184,12 @@ struct OcclusionTraversal::Impl {
             const glm::mat4& matrix, std::uint64_t instancePath, std::uint64_t prototypeTriangles);
     std::uint32_t listIndex(std::uint32_t transform);
     void markVisible(std::uint32_t slot);
+    /** A cube (or a deferred node's) for pass 2 below currentSlot: pulled up like visibility. */
+    void sawCube();
     void flush();
+    /** Pass 1's slots into the history (before pass 2, which reads what had cubes below). */
+    void rememberSlots();
+    /** The late answers into the history; old entries dropped. */
     void finishFrame();
     bool budgetLeft() const { return stats->occlusionQueries < frame->occlusion.queryBudget; }
     QueryTicket issue(std::span<const OcclusionBox> boxes);
@@ -212,6 +229,7 @@ struct OcclusionTraversal::Impl {
     };
     std::vector<ChildRecord> children; ///< expandCell's stack of decoded children
     bool cubesSeen = false;            ///< pass 1 met a node drawn as its cube: pass 2 has work
+    std::uint32_t currentSlot = kNone; ///< the slotted node whose subtree pass 1 is expanding
     std::vector<OcclusionBox> boxes;
 };
 
@@ -249,7 +267,7 @@ Status OcclusionTraversal::Impl::traverse(
     nodePages.beginFrame();
     nodePages.countInto(frameStats);
     failures.clear();
-    occluded.clear();
+    occluded.startFrame(frameNumber);
     pixelScale = frame->camera.pixelScale(static_cast<float>(frame->height));
     const float aspect =
             static_cast<float>(frame->width) / std::max(static_cast<float>(frame->height), 1.0f);
@@ -314,7 +332,8 @@ Status OcclusionTraversal::Impl::traverse(
     }
     flush();
 
-    // Pass 2: the cubes, back to front, skipping what pass 1 found hidden.
+    rememberSlots();
+    // Pass 2: the cubes, back to front, skipping what pass 1 found hidden or walked cube-free.
     FrameStats cubeStats;
     const Status drawn =
             cubesSeen ? cubes.traverse(
@@ -399,7 +418,8 @@ void OcclusionTraversal::Impl::pushChild(
     if (detail::drawnAsCube(record, projected, frame->selection)) {
         // Pass 2 draws it. A cube costs less to draw than to test and writes no depth: it is
         // neither tested nor remembered, only seen (its parent stays visible).
-        cubesSeen = true;
+        currentSlot = parent;
+        sawCube();
         markVisible(parent);
         return;
     }
@@ -407,6 +427,13 @@ void OcclusionTraversal::Impl::pushChild(
             toVec3(record.boundsMin), toVec3(record.boundsMax), t.localEye);
     queue.push_back({record, ref, distance, projected, transform, parent, depth});
     std::push_heap(queue.begin(), queue.end(), farther);
+}
+
+void OcclusionTraversal::Impl::sawCube() {
+    cubesSeen = true;
+    for (std::uint32_t slot = currentSlot; slot != kNone && !slots[slot].cubesBelow;
+         slot = slots[slot].parent)
+        slots[slot].cubesBelow = true;
 }
 
 void OcclusionTraversal::Impl::markVisible(std::uint32_t slot) {
@@ -428,6 +455,7 @@ void OcclusionTraversal::Impl::process(const Entry& entry) {
     const auto slot = static_cast<std::uint32_t>(slots.size());
     slots.push_back({key, entry.parent, false});
     const Tested visit{entry, slot, projected};
+    currentSlot = slot;
     if (!worthTesting(entry)) {
         // Too little below it to pay for a test: drawn whole, without tests or history.
         markVisible(slot);
@@ -437,7 +465,8 @@ void OcclusionTraversal::Impl::process(const Entry& entry) {
     // A prototype's root has its instance's box: the instance node was the test.
     const bool prototypeRoot = node.level == 0 && t.prototypeTriangles > 0;
     const auto it = history.find(key);
-    const bool visibleLastFrame = it != history.end() && it->second.lastVisible + 1 >= frameNumber;
+    const bool visibleLastFrame = frame->occlusion.coherent && it != history.end() &&
+                                  it->second.lastVisible + 1 >= frameNumber;
     if (visibleLastFrame || prototypeRoot)
         draw(visit);
     else
@@ -445,6 +474,7 @@ void OcclusionTraversal::Impl::process(const Entry& entry) {
 }
 
 void OcclusionTraversal::Impl::draw(const Tested& node) {
+    currentSlot = node.slot;
     refine(node.entry, node.slot, node.projected);
 }
 
@@ -467,13 +497,17 @@ bool OcclusionTraversal::Impl::testable(const Entry& entry, OcclusionBox& box) c
                                                                                 std::abs(hi.z)});
     lo -= glm::vec3(grow);
     hi += glm::vec3(grow);
-    // And by ε + 1 pixels on screen, at the box's nearest point: a cube below it may be drawn as
-    // a point sprite, a square that reaches past its cell's silhouette by up to ε pixels.
+    // And by ε + 1 pixels on screen wherever in the box (at its farthest point, where a world
+    // unit is fewest pixels): a cube below it may be drawn as a point sprite, a square that
+    // reaches past its cell's silhouette by up to ε pixels.
+    float farthest = frame->camera.zNear;
+    for (int c = 0; c < 8; ++c) {
+        const glm::vec3 local{(c & 1) ? hi.x : lo.x, (c & 2) ? hi.y : lo.y, (c & 4) ? hi.z : lo.z};
+        farthest = std::max(farthest, -(view * (t.matrix * glm::vec4(local, 1.0f))).z);
+    }
     const float pixelsOut = frame->selection.epsilonPixels + 1.0f;
     const float worldOut =
-            frame->camera.orthographic
-                    ? pixelsOut / pixelScale
-                    : pixelsOut * std::max(entry.distance, frame->camera.zNear) / pixelScale;
+            frame->camera.orthographic ? pixelsOut / pixelScale : pixelsOut * farthest / pixelScale;
     glm::vec3 axes[3];
     for (int a = 0; a < 3; ++a) {
         const glm::vec3 axis(t.matrix[a]);
@@ -581,6 +615,7 @@ void OcclusionTraversal::Impl::issueQueued() {
 }
 
 void OcclusionTraversal::Impl::answer(const Query& query, bool visible) {
+    visible = visible || frame->occlusion.ignoreAnswers;
     if (visible && query.count > 1) {
         // A group that did not stay hidden: each node is tested on its own.
         const auto start = std::chrono::steady_clock::now();
@@ -615,12 +650,14 @@ void OcclusionTraversal::Impl::answer(const Query& query, bool visible) {
             h.hiddenTests = static_cast<std::uint16_t>(
                     std::min<int>(h.hiddenTests + 1, std::numeric_limits<std::uint16_t>::max()));
             ++stats->nodesOccluded;
-            occluded.insert(slots[node.slot].key);
+            h.occludedFrame = frameNumber;
         }
     }
 }
 
 void OcclusionTraversal::Impl::testLate(const Entry& entry, std::uint32_t slot) {
+    if (!frame->occlusion.coherent)
+        return; // late answers are for the next frame's history
     // Spread over frames: each node at its own phase of the interval.
     const std::uint32_t interval = std::max<std::uint32_t>(frame->occlusion.visibleTestInterval, 1);
     const std::size_t phase = NodeKeyHash{}(slots[slot].key) % interval;
@@ -646,7 +683,7 @@ bool OcclusionTraversal::Impl::enterInstance(
     const storage::PrototypeRecord& prototype = scene.prototypes()[instance.prototype];
     rootRef = prototype.root;
     if (nodePages.readNode(rootRef, priority, root) != Fetch::Ready) {
-        cubesSeen = true; // drawn as its cube (pass 2)
+        sawCube(); // drawn as its cube (pass 2)
         return false;
     }
     ++stats->instancesEntered;
@@ -667,7 +704,7 @@ OcclusionTraversal::Impl::Expanded OcclusionTraversal::Impl::expandCell(
     const bool geometryReady =
             nodePages.collectGeometry(node, priority, services->uploads, runs) == Fetch::Ready;
     if (!childrenReady || !geometryReady) {
-        cubesSeen = true; // its cube stands in for the subtree (pass 2)
+        sawCube(); // its cube stands in for the subtree (pass 2)
         return Expanded::Deferred;
     }
     // Decode every child before drawing anything, so a bad child leaves the whole cell to its
@@ -679,7 +716,7 @@ OcclusionTraversal::Impl::Expanded OcclusionTraversal::Impl::expandCell(
         if (!record) {
             nodePages.reportFailure(record.status());
             children.resize(base);
-            cubesSeen = true;
+            sawCube();
             return Expanded::Deferred;
         }
         children.push_back({*record, childRef});
@@ -749,7 +786,7 @@ void OcclusionTraversal::Impl::drawSubtree(
     const float projected =
             detail::projectedPixels(node, t.localEye, t.metric, frame->camera, pixelScale);
     if (detail::drawnAsCube(node, projected, frame->selection)) {
-        cubesSeen = true;
+        sawCube();
         return;
     }
     const float priority =
@@ -784,7 +821,13 @@ std::uint64_t OcclusionTraversal::Impl::estimatedTriangles(const Entry& entry) c
 }
 
 bool OcclusionTraversal::Impl::worthTesting(const Entry& entry) const {
-    return estimatedTriangles(entry) >= frame->occlusion.minTestTriangles;
+    const auto least = static_cast<float>(frame->occlusion.minTestTriangles);
+    // Seen small, a subtree is cut into at most (size / ε)² cubes: too few to pay for a test
+    // (or for the walk's state), whatever it holds.
+    const float epsilon = frame->selection.epsilonPixels;
+    if (epsilon > 0.0f && entry.projected < epsilon * std::sqrt(least))
+        return false;
+    return static_cast<float>(estimatedTriangles(entry)) >= least;
 }
 
 void OcclusionTraversal::Impl::reportCycle() {
@@ -794,15 +837,20 @@ void OcclusionTraversal::Impl::reportCycle() {
                            " levels: the hierarchy has a reference cycle"));
 }
 
-void OcclusionTraversal::Impl::finishFrame() {
+void OcclusionTraversal::Impl::rememberSlots() {
     for (const Slot& slot : slots) {
         History& h = history[slot.key];
         h.lastSeen = frameNumber;
+        if (slot.cubesBelow)
+            h.cubesFrame = frameNumber;
         if (slot.visible) {
             h.lastVisible = frameNumber;
             h.hidden = false;
         }
     }
+}
+
+void OcclusionTraversal::Impl::finishFrame() {
     if (!late.empty()) {
         services->occlusion->submit();
         for (const LateQuery& query : late) {

@@ -102,7 +102,7 @@ TEST(GeneratorCatalogTest, ListsEveryGeneratorWithDocumentedParameters) {
             EXPECT_GT(colon, 0u) << info.name << "." << key;
         }
     }
-    EXPECT_EQ(names, (std::set<std::string>{"forest", "terrain", "molecule", "blinds", "sphere", "city"}));
+    EXPECT_EQ(names, (std::set<std::string>{"forest", "terrain", "molecule", "blinds", "sphere", "city", "cathedral"}));
 }
 
 TEST(GeneratorCatalogTest, CatalogDefaultsAreAccepted) {
@@ -125,9 +125,9 @@ TEST(GeneratorCatalogTest, CatalogDefaultsAreAccepted) {
 // ---------------------------------------------------------------------------------------------
 
 TEST(GeneratorsTest, RejectsUnknownGenerator) {
-    const Status status = failureOf("cathedral");
+    const Status status = failureOf("ziggurat");
     EXPECT_EQ(status.code(), ErrorCode::InvalidArgument);
-    EXPECT_NE(status.message().find("cathedral"), std::string::npos) << status.toString();
+    EXPECT_NE(status.message().find("ziggurat"), std::string::npos) << status.toString();
 }
 
 TEST(GeneratorsTest, RejectsBadParametersNamingTheKey) {
@@ -216,7 +216,8 @@ INSTANTIATE_TEST_SUITE_P(
                 GoldenScene{
                         "blinds:slabs=20,tilt=30", 0x05b6126a4f525d95ull, 0xd6e975053c6d83d5ull},
                 GoldenScene{"sphere:triangles=2000,radius=3", 0xe25d855477140997ull, 0xd6e975053c6d83d5ull},
-                GoldenScene{"city:blocks=3,floors=2,items=2,seed=7", 0xd2009451b99c759dull, 0xefcbbc213fa8a5a4ull}),
+                GoldenScene{"city:blocks=3,floors=2,items=2,seed=7", 0xd2009451b99c759dull, 0xefcbbc213fa8a5a4ull},
+                GoldenScene{"cathedral:bays=3", 0x010e54938007ffd9ull, 0xd6e975053c6d83d5ull}),
         [](const ::testing::TestParamInfo<GoldenScene>& param) {
             const std::string spec = param.param.spec;
             return spec.substr(0, spec.find(':'));
@@ -549,6 +550,31 @@ TEST(CityGeneratorTest, FlatAndInstancedHoldTheSameTriangles) {
     EXPECT_NEAR(city.boundsMax.x - city.boundsMin.x, 80.0f, 1e-3f);
     EXPECT_NEAR(city.boundsMin.y, -0.2f, 1e-4f);
     EXPECT_LE(city.boundsMax.y, 4 * 3.0f + 1e-3f);
+}
+
+TEST(CathedralGeneratorTest, TheDefaultCathedralIsAtLeastMeissnersSize) {
+    CountingSink sink;
+    const GeneratorReport report = run("cathedral", sink);
+    EXPECT_GE(report.triangles, 417'000u) << "Meißner et al.'s Cathedral: 417 k triangles";
+    expectReportMatchesSink(report, sink);
+    EXPECT_EQ(sink.zeroAreaTriangles, 0u);
+    EXPECT_EQ(sink.nonFiniteTriangles, 0u);
+    ASSERT_EQ(sink.prototypes.size(), 1u);
+    // The nave runs along +z from the west door; the vault tops out at 16 + 7 units.
+    const CountingSink::PrototypeStats& church = sink.prototypes[0];
+    EXPECT_NEAR(church.boundsMin.z, 0.0f, 1e-4f);
+    EXPECT_NEAR(church.boundsMax.z, 6.4f * 13.0f, 1e-3f);
+    EXPECT_NEAR(church.boundsMax.y, 23.0f, 1e-3f);
+    EXPECT_NEAR(church.boundsMax.x - church.boundsMin.x, 26.0f, 1e-3f);
+}
+
+TEST(CathedralGeneratorTest, DetailAndBaysScaleTheTriangles) {
+    CountingSink base, detailed, longer;
+    const GeneratorReport a = run("cathedral:bays=4", base);
+    const GeneratorReport b = run("cathedral:bays=4,detail=2", detailed);
+    const GeneratorReport c = run("cathedral:bays=8", longer);
+    EXPECT_GT(b.triangles, 3 * a.triangles); // most surfaces tessellate in two directions
+    EXPECT_GT(c.triangles, a.triangles + a.triangles / 2);
 }
 
 } // namespace

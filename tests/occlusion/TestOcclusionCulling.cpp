@@ -12,6 +12,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <filesystem>
 #include <memory>
 #include <string>
@@ -22,7 +23,7 @@ namespace {
 
 namespace fs = std::filesystem;
 
-/** Depth ties (two surfaces at one depth, drawn in another order) may differ: 0.01 %. */
+/** Pixels where surfaces tie in depth may differ with draw order: 0.01 % beyond those. */
 constexpr double kTiedPixelShare = 1e-4;
 
 fs::path freshDir() {
@@ -136,8 +137,11 @@ protected:
         ASSERT_TRUE(culling.isOk()) << culling.status().toString();
         auto plain = StreamingSession::open(file, options);
         ASSERT_TRUE(plain.isOk()) << plain.status().toString();
+        auto orderOnly = StreamingSession::open(file, options);
+        ASSERT_TRUE(orderOnly.isOk()) << orderOnly.status().toString();
         mCulling = std::move(*culling);
         mPlain = std::move(*plain);
+        mOrderOnly = std::move(*orderOnly);
         mBounds = sceneBounds(mCulling->scene());
     }
 
@@ -153,6 +157,7 @@ protected:
     std::unique_ptr<OffscreenContext> mContext;
     std::unique_ptr<StreamingSession> mCulling;
     std::unique_ptr<StreamingSession> mPlain;
+    std::unique_ptr<StreamingSession> mOrderOnly; ///< occlusion's order, every answer visible
     Bounds mBounds;
 };
 
@@ -210,6 +215,7 @@ TEST_P(NothingVisibleIsCulled, AlongAWalkWithJumps) {
     const auto& [generator, epsilon] = GetParam();
     open(buildGenerated(freshDir(), generator));
     std::uint64_t occluded = 0;
+    std::size_t mostTies = 0;
     std::uint64_t culledTriangles = 0;
     std::uint64_t plainTriangles = 0;
     const std::vector<Camera> walk = walkWithJumps(mBounds);
@@ -219,12 +225,30 @@ TEST_P(NothingVisibleIsCulled, AlongAWalkWithJumps) {
         ASSERT_TRUE(culled.isOk()) << culled.status().toString();
         auto reference = mPlain->render(frame(walk[i], epsilon, false));
         ASSERT_TRUE(reference.isOk()) << reference.status().toString();
-        EXPECT_LE(differingPixels(culled->image, reference->image), allowedPixels(culled->image));
+        // Where surfaces tie in depth (the forest's crossed leaves), draw order decides: the
+        // same walk with every answer taken as visible draws in culling's order without
+        // culling, and counts those pixels.
+        FrameContext orderOnly = frame(walk[i], epsilon, true);
+        orderOnly.occlusion.ignoreAnswers = true;
+        auto unculled = mOrderOnly->render(orderOnly);
+        ASSERT_TRUE(unculled.isOk()) << unculled.status().toString();
+        const std::size_t ties = differingPixels(unculled->image, reference->image);
+        // The forest's leaves cross and coincide, so its ties run higher than the molecule's.
+        const double tieShare = generator.starts_with("forest") ? 5e-4 : kTiedPixelShare;
+        EXPECT_LE(
+                static_cast<double>(ties),
+                tieShare * unculled->image.width * unculled->image.height)
+                << "depth ties";
+        mostTies = std::max(mostTies, ties);
+        EXPECT_LE(
+                differingPixels(culled->image, reference->image),
+                ties + allowedPixels(culled->image));
         EXPECT_LE(culled->stats.trianglesDrawn, reference->stats.trianglesDrawn);
         occluded += culled->stats.nodesOccluded;
         culledTriangles += culled->stats.trianglesDrawn;
         plainTriangles += reference->stats.trianglesDrawn;
     }
+    RecordProperty("most_tied_pixels", std::to_string(mostTies));
     // The comparison above means something only if occlusion culled something.
     EXPECT_GT(occluded, 0u);
     EXPECT_LT(culledTriangles, plainTriangles);

@@ -21,6 +21,7 @@ struct PathArgs {
     std::string scene;
     std::string output;
     runtime::PathGeneratorOptions generator;
+    std::string legs; ///< walk: world coordinates
     CLI::Option* framesOption = nullptr; ///< whether --frames was given (gltf paths)
 };
 
@@ -85,7 +86,17 @@ int runPath(const PathArgs& args) {
         path = runtime::makeFlythroughPath(bounds, args.generator);
     else if (args.kind == "teleports")
         path = runtime::makeTeleportPath(bounds, args.generator);
-    else
+    else if (args.kind == "walk") {
+        auto legs = runtime::parseWalkLegs(args.legs);
+        if (!legs)
+            return reportError("path", legs.status().withContext("--legs"));
+        runtime::PathGeneratorOptions options = args.generator;
+        options.legs = std::move(*legs);
+        for (auto& leg : options.legs) // world coordinates into the file's frame
+            for (glm::dvec3& point : leg)
+                point -= runtime::sceneOrigin(**scene);
+        path = runtime::makeWalkPath(bounds, options);
+    } else
         path = gltfCameraPath(**scene, args);
     if (!path)
         return reportError("path", path.status().withContext(args.kind));
@@ -117,10 +128,10 @@ CommandRunner addPathCommand(CLI::App& app) {
                "kind",
                args->kind,
                "orbit: circle around the scene; flythrough: through its interior; teleports: "
-               "random jumps "
-               "held a few frames; gltf: through the scene's glTF cameras")
+               "random jumps held a few frames; walk: along given legs (--legs), jumping between "
+               "them; gltf: through the scene's glTF cameras")
             ->required()
-            ->check(CLI::IsMember({"orbit", "flythrough", "teleports", "gltf"}));
+            ->check(CLI::IsMember({"orbit", "flythrough", "teleports", "walk", "gltf"}));
     cmd->add_option("scene", args->scene, "Scene file (.ffs)")->required();
     cmd->add_option("-o,--output", args->output, "Camera path to write (.json)")->required();
     args->framesOption = cmd->add_option(
@@ -134,6 +145,13 @@ CommandRunner addPathCommand(CLI::App& app) {
     cmd->add_option("--teleports", args->generator.teleports, "Number of jumps (teleports)")
             ->capture_default_str();
     cmd->add_option("--fov", args->generator.fovDegrees, "Vertical field of view, degrees")
+            ->capture_default_str();
+    cmd->add_option(
+            "--legs",
+            args->legs,
+            "walk: polylines in world coordinates, \"x,y,z x,y,z; x,y,z x,y,z\" (legs separated by "
+            "';'), e.g. along a street at eye height");
+    cmd->add_option("--look-ahead", args->generator.legLookAhead, "walk: how far ahead the camera looks, units")
             ->capture_default_str();
     return [args]() { return runPath(*args); };
 }

@@ -16,11 +16,13 @@ namespace {
 
 constexpr std::array<ParamDef, 2> kParams = {{
         {"bays", "12", "pillars along each arcade (2..256); the nave is 6.4 units a bay long"},
-        {"detail", "1", "tessellation multiplier (1..16): 1 gives about 430 k triangles at 12 bays"},
+        {"detail",
+         "1",
+         "tessellation multiplier (1..16): 1 gives about 430 k triangles at 12 bays"},
 }};
 
-constexpr float kBay = 6.4f;        ///< pillar spacing along the nave
-constexpr float kNaveHalf = 7.0f;   ///< the arcades stand at x = +-7
+constexpr float kBay = 6.4f;         ///< pillar spacing along the nave
+constexpr float kNaveHalf = 7.0f;    ///< the arcades stand at x = +-7
 constexpr float kAisleOuter = 13.0f; ///< the outer walls at x = +-13
 constexpr float kPillarRadius = 0.8f;
 constexpr float kPillarHeight = 7.0f; ///< the arches spring here and rise half a bay
@@ -59,10 +61,11 @@ Status emitQuadGrid(
         const glm::vec4& color,
         TriangleBatcher& out) {
     auto at = [&](std::uint32_t i, std::uint32_t j) {
-        return SourceVertex{origin + u * (static_cast<float>(i) / static_cast<float>(nu)) +
-                                    v * (static_cast<float>(j) / static_cast<float>(nv)),
-                            normal,
-                            color};
+        return SourceVertex{
+                origin + u * (static_cast<float>(i) / static_cast<float>(nu)) +
+                        v * (static_cast<float>(j) / static_cast<float>(nv)),
+                normal,
+                color};
     };
     for (std::uint32_t j = 0; j < nv; ++j)
         for (std::uint32_t i = 0; i < nu; ++i) {
@@ -98,7 +101,14 @@ Status emitRevolution(
 
 /** A semicircular arch in the plane x = x0 over [z0, z0 + span], springing at height y0: a
  *  swept square section `thickness` wide, `steps` along the arc (4 faces a step). */
-Status emitArch(float x0, float z0, float y0, float span, float thickness, std::uint32_t steps, TriangleBatcher& out) {
+Status emitArch(
+        float x0,
+        float z0,
+        float y0,
+        float span,
+        float thickness,
+        std::uint32_t steps,
+        TriangleBatcher& out) {
     const float radius = 0.5f * span;
     const glm::vec3 centre(x0, y0, z0 + radius);
     const glm::vec4 color = stone(0.9f);
@@ -135,36 +145,75 @@ Result<GeneratorReport> runCathedral(const GeneratorSpec& spec, ISceneSink& sink
     const auto tilesZ = static_cast<std::uint32_t>(length);
     for (std::uint32_t j = 0; j < tilesZ; ++j)
         for (std::uint32_t i = 0; i < tilesX; ++i) {
-            const glm::vec3 origin(-kAisleOuter + static_cast<float>(i), 0.0f, static_cast<float>(j));
-            const glm::vec4 color = (i + j) % 2 ? glm::vec4(0.75f, 0.72f, 0.66f, 1.0f) : glm::vec4(0.28f, 0.26f, 0.25f, 1.0f);
-            FF_RETURN_IF_ERROR(emitQuadGrid(origin, {1, 0, 0}, {0, 0, 1}, 1, 1, {0, 1, 0}, color, out));
+            const glm::vec3 origin(
+                    -kAisleOuter + static_cast<float>(i), 0.0f, static_cast<float>(j));
+            const glm::vec4 color = (i + j) % 2 ? glm::vec4(0.75f, 0.72f, 0.66f, 1.0f)
+                                                : glm::vec4(0.28f, 0.26f, 0.25f, 1.0f);
+            FF_RETURN_IF_ERROR(
+                    emitQuadGrid(origin, {1, 0, 0}, {0, 0, 1}, 1, 1, {0, 1, 0}, color, out));
         }
     // Outer walls, the aisles' ceilings, the clerestory walls above the arcades, the end walls.
     for (const float side : {-1.0f, 1.0f}) {
-        FF_RETURN_IF_ERROR(emitQuadGrid({side * kAisleOuter, 0, 0}, {0, 0, length}, {0, kAisleHeight, 0}, alongNave, 10 * d,
-                                        {-side, 0, 0}, stone(0.8f), out));
-        FF_RETURN_IF_ERROR(emitQuadGrid({side * kNaveHalf, kAisleHeight, 0}, {side * (kAisleOuter - kNaveHalf), 0, 0},
-                                        {0, 0, length}, 6 * d, alongNave, {0, -1, 0}, stone(0.7f), out));
-        FF_RETURN_IF_ERROR(emitQuadGrid({side * kNaveHalf, kAisleHeight, 0}, {0, 0, length},
-                                        {0, kClerestoryTop - kAisleHeight, 0}, alongNave, 6 * d, {-side, 0, 0},
-                                        stone(0.85f), out));
+        FF_RETURN_IF_ERROR(emitQuadGrid(
+                {side * kAisleOuter, 0, 0},
+                {0, 0, length},
+                {0, kAisleHeight, 0},
+                alongNave,
+                10 * d,
+                {-side, 0, 0},
+                stone(0.8f),
+                out));
+        FF_RETURN_IF_ERROR(emitQuadGrid(
+                {side * kNaveHalf, kAisleHeight, 0},
+                {side * (kAisleOuter - kNaveHalf), 0, 0},
+                {0, 0, length},
+                6 * d,
+                alongNave,
+                {0, -1, 0},
+                stone(0.7f),
+                out));
+        FF_RETURN_IF_ERROR(emitQuadGrid(
+                {side * kNaveHalf, kAisleHeight, 0},
+                {0, 0, length},
+                {0, kClerestoryTop - kAisleHeight, 0},
+                alongNave,
+                6 * d,
+                {-side, 0, 0},
+                stone(0.85f),
+                out));
     }
     for (const float z : {0.0f, length}) {
         const glm::vec3 facing(0.0f, 0.0f, z == 0.0f ? 1.0f : -1.0f);
-        FF_RETURN_IF_ERROR(emitQuadGrid({-kAisleOuter, 0, z}, {2 * kAisleOuter, 0, 0}, {0, kAisleHeight, 0}, 26 * d,
-                                        10 * d, facing, stone(0.75f), out));
-        FF_RETURN_IF_ERROR(emitQuadGrid({-kNaveHalf, kAisleHeight, z}, {2 * kNaveHalf, 0, 0},
-                                        {0, kClerestoryTop + kNaveHalf - kAisleHeight, 0}, 14 * d, 14 * d, facing,
-                                        stone(0.75f), out));
+        FF_RETURN_IF_ERROR(emitQuadGrid(
+                {-kAisleOuter, 0, z},
+                {2 * kAisleOuter, 0, 0},
+                {0, kAisleHeight, 0},
+                26 * d,
+                10 * d,
+                facing,
+                stone(0.75f),
+                out));
+        FF_RETURN_IF_ERROR(emitQuadGrid(
+                {-kNaveHalf, kAisleHeight, z},
+                {2 * kNaveHalf, 0, 0},
+                {0, kClerestoryTop + kNaveHalf - kAisleHeight, 0},
+                14 * d,
+                14 * d,
+                facing,
+                stone(0.75f),
+                out));
     }
     // The barrel vault over the nave: a half cylinder along z, seen from below.
     {
         const std::uint32_t around = 192 * d;
         auto at = [&](std::uint32_t i, std::uint32_t j) {
-            const SinCos a = sinCosTurns(0.5 * static_cast<double>(i) / static_cast<double>(around));
+            const SinCos a =
+                    sinCosTurns(0.5 * static_cast<double>(i) / static_cast<double>(around));
             const glm::vec3 inward(-static_cast<float>(a.cos), -static_cast<float>(a.sin), 0.0f);
-            const glm::vec3 position(kNaveHalf * static_cast<float>(a.cos), kClerestoryTop + kNaveHalf * static_cast<float>(a.sin),
-                                     length * static_cast<float>(j) / static_cast<float>(alongNave * 6));
+            const glm::vec3 position(
+                    kNaveHalf * static_cast<float>(a.cos),
+                    kClerestoryTop + kNaveHalf * static_cast<float>(a.sin),
+                    length * static_cast<float>(j) / static_cast<float>(alongNave * 6));
             return SourceVertex{position, inward, stone(0.95f)};
         };
         for (std::uint32_t j = 0; j < alongNave * 6; ++j)
@@ -178,15 +227,19 @@ Result<GeneratorReport> runCathedral(const GeneratorSpec& spec, ISceneSink& sink
         for (std::uint32_t b = 0; b < p.bays; ++b) {
             const glm::vec3 base(side * kNaveHalf, 0.0f, kBay * static_cast<float>(b + 1));
             FF_RETURN_IF_ERROR(emitRevolution(
-                    base, 64 * d, 80 * d,
+                    base,
+                    64 * d,
+                    80 * d,
                     [](float t) {
                         // A plinth and a capital a quarter wider than the shaft.
                         const float swell = t < 0.05f ? 1.25f : (t > 0.93f ? 1.25f : 1.0f);
                         return std::pair<float, float>{kPillarRadius * swell, kPillarHeight * t};
                     },
-                    stone(0.9f), out));
+                    stone(0.9f),
+                    out));
             if (b + 1 < p.bays)
-                FF_RETURN_IF_ERROR(emitArch(side * kNaveHalf, base.z, kPillarHeight, kBay, 0.6f, 96 * d, out));
+                FF_RETURN_IF_ERROR(
+                        emitArch(side * kNaveHalf, base.z, kPillarHeight, kBay, 0.6f, 96 * d, out));
         }
     }
     FF_ASSIGN_OR_RETURN(const GeneratorReport report, flushSingleMesh(out));
@@ -199,7 +252,8 @@ Result<GeneratorReport> runCathedral(const GeneratorSpec& spec, ISceneSink& sink
 GeneratorEntry cathedralGenerator() {
     return {makeGeneratorInfo(
                     "cathedral",
-                    "a basilica seen from inside: nave, barrel vault, arcades of pillars and arches "
+                    "a basilica seen from inside: nave, barrel vault, arcades of pillars and "
+                    "arches "
                     "(Meißner et al.'s low-occlusion scene)",
                     kParams),
             &runCathedral};

@@ -9,7 +9,12 @@
 #include <ff/runtime/CameraPath.h>
 #include <ff/storage/Status.h>
 
+#include <glm/glm.hpp>
+
 #include <cstdint>
+#include <string>
+#include <string_view>
+#include <vector>
 
 namespace ff::runtime {
 
@@ -19,6 +24,10 @@ struct PathGeneratorOptions {
     std::uint64_t seed = 1;     ///< flythrough waypoints, teleport positions (splitmix64)
     std::int64_t teleports = 8; ///< teleports: number of jumps, >= 1 and <= frames / 2
     double fovDegrees = 45.0;   ///< vertical field of view, in (0, 180)
+    /** walk: polylines in the scene file's frame (as --eye); the camera jumps between them. */
+    std::vector<std::vector<glm::dvec3>> legs;
+    /** walk: how far ahead along a leg the camera looks, scene units. */
+    double legLookAhead = 10.0;
 };
 
 /**
@@ -50,5 +59,21 @@ makeFlythroughPath(const Bounds& bounds, const PathGeneratorOptions& options = {
  */
 [[nodiscard]] Result<CameraPath>
 makeTeleportPath(const Bounds& bounds, const PathGeneratorOptions& options = {});
+
+/**
+ * A walk-through given by its legs (options.legs: polylines, e.g. along a street at eye
+ * height): each leg walked at constant speed, looking ahead along it; the frames are shared out
+ * by length (two at least a leg), and from one leg to the next the camera jumps, a teleport
+ * between two consecutive frames. Errors: InvalidArgument for no legs, a leg of fewer than two
+ * points or no length, non-finite points, fewer than 2 frames a leg, and as makeOrbitPath().
+ */
+[[nodiscard]] Result<CameraPath>
+makeWalkPath(const Bounds& bounds, const PathGeneratorOptions& options);
+
+/** "x,y,z x,y,z; x,y,z x,y,z": legs separated by ';', points by spaces. InvalidArgument naming
+ *  the bad point. */
+[[nodiscard]] Result<std::vector<std::vector<glm::dvec3>>> parseWalkLegs(std::string_view text);
+/** The text parseWalkLegs() reads (numbers round-trip). */
+std::string formatWalkLegs(const std::vector<std::vector<glm::dvec3>>& legs);
 
 } // namespace ff::runtime

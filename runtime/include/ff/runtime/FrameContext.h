@@ -27,6 +27,13 @@ struct FrameBudgets {
  */
 struct OcclusionOptions {
     bool enabled = false;
+    /** CHC++'s temporal coherence. Off: no history, every node is tested before it is drawn,
+     *  every frame (what coherence saves is measured against this). */
+    bool coherent = true;
+    /** Diagnostic: issue every test but take every answer as visible. The frame is drawn in
+     *  occlusion culling's order without its culling, so comparing it with a frustum-culled
+     *  frame measures the pixels where surfaces tie in depth and draw order decides. */
+    bool ignoreAnswers = false;
     /** Occlusion tests a frame may issue; past it, untested nodes are drawn (Unknown). */
     std::uint32_t queryBudget = 8192;
     /** Nodes waiting for a test are issued together once this many are queued (or when the

@@ -47,10 +47,13 @@ struct NodeKey {
 
 struct NodeKeyHash {
     std::size_t operator()(const NodeKey& key) const noexcept {
-        const std::uint64_t node = (std::uint64_t{key.node.page} << 32) | key.node.slot;
-        return static_cast<std::size_t>((key.instancePath ^ (node * 0xC2B2AE3D27D4EB4Full)) *
-                                        0x9E3779B97F4A7C15ull >>
-                                        7);
+        // The SplitMix64 finaliser over both halves: every bit of the key reaches every bit of
+        // the hash, so std::unordered_map's prime-modulo buckets stay short.
+        std::uint64_t z = key.instancePath ^
+                          (((std::uint64_t{key.node.page} << 32) | key.node.slot) * 0x9E3779B97F4A7C15ull);
+        z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
+        z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
+        return static_cast<std::size_t>(z ^ (z >> 31));
     }
 };
 
