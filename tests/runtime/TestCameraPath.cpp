@@ -538,6 +538,65 @@ std::vector<std::int64_t> cutFrames(const CameraPath& path) {
     return frames;
 }
 
+TEST(CameraPathGeneratorsTest, WalkKeepsItsSpeedOnEachLegAndJumpsBetweenThem) {
+    PathGeneratorOptions options;
+    options.frames = 60;
+    options.legs = {{{0, 1.7, 40}, {0, 1.7, 0}, {20, 1.7, 0}}, {{-40, 1.7, -10}, {40, 1.7, -10}}};
+    options.legLookAhead = 5.0;
+    auto path = makeWalkPath(kBounds, options);
+    ASSERT_TRUE(path) << path.status().toString();
+    ASSERT_EQ(path->frameCount(), 60);
+    // 60 and 80 units long: 26 and 34 frames, at the legs' own constant speeds.
+    const CameraPose first = path->pose(path->frameTime(0));
+    EXPECT_NEAR(glm::length(first.position - glm::dvec3(0, 1.7, 40)), 0.0, 1e-9);
+    EXPECT_NEAR(glm::dot(first.forward(), glm::dvec3(0, 0, -1)), 1.0, 1e-9); // down the first leg
+    std::vector<double> steps;
+    for (std::int64_t f = 1; f < 60; ++f)
+        steps.push_back(glm::length(path->pose(path->frameTime(f)).position -
+                                    path->pose(path->frameTime(f - 1)).position));
+    const double legOne = 60.0 / 25.0;
+    const double legTwo = 80.0 / 33.0;
+    std::size_t jumps = 0;
+    for (std::size_t i = 0; i < steps.size(); ++i) {
+        if (steps[i] > 10.0) {
+            ++jumps; // from the first leg's end (20, 1.7, 0) to the second's start
+            EXPECT_NEAR(steps[i], glm::length(glm::dvec3(-60, 0, -10)), 1e-9);
+            continue;
+        }
+        // At the corner the step cuts across; elsewhere it is the leg's speed.
+        const double speed = i < 25 ? legOne : legTwo;
+        if (i != 16) { // 16 x 2.4 < 40 < 17 x 2.4: the corner
+            EXPECT_NEAR(steps[i], speed, 1e-6) << "step " << i;
+        }
+    }
+    EXPECT_EQ(jumps, 1u);
+    const CameraPose last = path->pose(path->endTime());
+    EXPECT_NEAR(glm::length(last.position - glm::dvec3(40, 1.7, -10)), 0.0, 1e-9);
+    EXPECT_NEAR(glm::dot(last.forward(), glm::dvec3(1, 0, 0)), 1.0, 1e-9);
+}
+
+TEST(CameraPathGeneratorsTest, WalkLegsParseRoundTripAndBadWalksAreRefused) {
+    auto legs = parseWalkLegs("0,1.7,40 0,1.7,0; -40,1.7,-10 40,1.7,-10.25");
+    ASSERT_TRUE(legs) << legs.status().toString();
+    ASSERT_EQ(legs->size(), 2u);
+    EXPECT_EQ((*legs)[1][1], glm::dvec3(40, 1.7, -10.25));
+    auto again = parseWalkLegs(formatWalkLegs(*legs));
+    ASSERT_TRUE(again);
+    EXPECT_EQ(*again, *legs);
+    EXPECT_FALSE(parseWalkLegs("0,1,2 3,4"));
+    EXPECT_FALSE(parseWalkLegs("0,1,x"));
+    PathGeneratorOptions options;
+    options.frames = 10;
+    EXPECT_EQ(makeWalkPath(kBounds, options).status().code(), ErrorCode::InvalidArgument); // no legs
+    options.legs = {{{0, 0, 0}}};
+    EXPECT_EQ(makeWalkPath(kBounds, options).status().code(), ErrorCode::InvalidArgument); // one point
+    options.legs = {{{0, 0, 0}, {0, 0, 0}}};
+    EXPECT_EQ(makeWalkPath(kBounds, options).status().code(), ErrorCode::InvalidArgument); // no length
+    options.legs = {{{0, 0, 0}, {1, 0, 0}}, {{0, 0, 0}, {1, 0, 0}}};
+    options.frames = 3;
+    EXPECT_EQ(makeWalkPath(kBounds, options).status().code(), ErrorCode::InvalidArgument); // 2 a leg
+}
+
 TEST(PathCutsTest, TeleportsCutAtEveryJumpAndOrbitsOnlyAtTheColdStart) {
     PathGeneratorOptions options;
     options.frames = 103;

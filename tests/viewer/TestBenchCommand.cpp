@@ -198,8 +198,9 @@ TEST(BenchCommandTest, PathScenarioWritesPerFrameAndSummaryCsvChartAndReport) {
 
     const std::vector<Row> summary = readCsv(out / "tiny-path-summary.csv");
     ASSERT_EQ(summary.size(), 3u);
+    ASSERT_GE(summary[0].size(), 15u);
     EXPECT_EQ(
-            summary[0],
+            Row(summary[0].begin(), summary[0].begin() + 15),
             (Row{"method",
                  "selection",
                  "eps",
@@ -225,12 +226,50 @@ TEST(BenchCommandTest, PathScenarioWritesPerFrameAndSummaryCsvChartAndReport) {
             std::stod(cell(summary, 2, "mean_instability")));
 
     EXPECT_EQ(cell(summary, 1, "bytes_read"), "0") << "every page resident: nothing read";
+    EXPECT_EQ(cell(summary, 1, "occlusion"), "off");
+    EXPECT_EQ(cell(summary, 1, "mean_queries"), "0.0");
 
     EXPECT_TRUE(fs::is_regular_file(out / "tiny-path.png"));
     EXPECT_FALSE(fs::exists(out / "tiny-path-bytes.png")) << "no bytes-read chart without streaming";
     const std::string md = readText(out / "tiny-path.md");
     EXPECT_NE(md.find("# A tiny path scenario"), std::string::npos) << md;
     EXPECT_NE(md.find("](tiny-path.png)"), std::string::npos) << md;
+}
+
+// Occlusion culling along a walk through a small city: the methods' Table-1 columns.
+TEST(BenchCommandTest, PathScenarioComparesOcclusionWithFrustumCullingAlongAWalk) {
+    const fs::path dir = freshTestDir();
+    writeText(dir / "tiny-city.json", R"({
+  "title": "A tiny city walk",
+  "kind": "path",
+  "scene": {"generate": "city:blocks=3"},
+  "size": [80, 60],
+  "path": {"generator": "walk", "frames": 4, "legs": [[[10, 1.7, 30], [10, 1.7, -30]]]},
+  "methods": [
+    {"label": "vfc", "eps": 0},
+    {"label": "occlusion", "eps": 0, "occlusion": true},
+    {"label": "no coherence", "eps": 0, "occlusion": true, "coherence": false}
+  ]
+})");
+    const fs::path out = dir / "out";
+    const ProcessResult r =
+            runFarfield({"bench", (dir / "tiny-city.json").string(), "--out", out.string()}, dir);
+    ASSERT_EQ(r.exitCode, 0) << r.describe();
+    const std::vector<Row> summary = readCsv(out / "tiny-city-summary.csv");
+    ASSERT_EQ(summary.size(), 4u);
+    EXPECT_EQ(cell(summary, 1, "occlusion"), "off");
+    EXPECT_EQ(cell(summary, 2, "occlusion"), "on");
+    EXPECT_EQ(cell(summary, 2, "coherence"), "on");
+    EXPECT_EQ(cell(summary, 3, "coherence"), "off");
+    EXPECT_EQ(std::stod(cell(summary, 1, "mean_queries")), 0.0);
+    EXPECT_GT(std::stod(cell(summary, 2, "mean_queries")), 0.0);
+    // From the street, the furnished interiors are hidden behind the facades.
+    EXPECT_LT(std::stod(cell(summary, 2, "mean_triangles")), 0.5 * std::stod(cell(summary, 1, "mean_triangles")));
+    EXPECT_GT(std::stod(cell(summary, 2, "mean_nodes_occluded")), 0.0);
+    EXPECT_GT(std::stod(cell(summary, 1, "mean_render_rate")), std::stod(cell(summary, 2, "mean_render_rate")));
+    const std::vector<Row> frames = readCsv(out / "tiny-city.csv");
+    for (const char* column : {"occlusion_ms", "occlusion_queries", "queries_waited", "render_rate"})
+        EXPECT_NE(std::find(frames[0].begin(), frames[0].end(), column), frames[0].end()) << column;
 }
 
 // Through a cold cache each method's reads add up frame by frame, and the report charts its
