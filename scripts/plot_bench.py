@@ -40,10 +40,11 @@ def number(text):
 INF_NOTE = "; identical = top"
 
 
-def capped(values, margin=3.0):
-    """Infinite PSNR (identical images) drawn just above the largest finite value (the axis
-    label then says so, with INF_NOTE)."""
-    finite = [v for v in values if math.isfinite(v)]
+def capped(values, margin=3.0, among=None):
+    """Infinite PSNR (identical images) drawn just above the largest finite value of `among`
+    (default: `values`; pass every series of a chart so they share one top), and the axis label
+    then says so, with INF_NOTE."""
+    finite = [v for v in (values if among is None else among) if math.isfinite(v)]
     top = (max(finite) if finite else 60.0) + margin
     return [top if v == math.inf else v for v in values]
 
@@ -274,11 +275,12 @@ def path(data, out, name):
     """Per-frame timelines per method: temporal instability, PSNR, frame time."""
     methods = list(dict.fromkeys(r["method"] for r in data))
     fig, (ax1, ax2, ax3) = plt.subplots(3, 1, figsize=(10, 8), sharex=True)
+    every_psnr = [number(r["psnr_db"]) for r in data]
     for i, m in enumerate(methods):
         sel = [r for r in data if r["method"] == m]
         x = [int(r["frame"]) for r in sel]
         ax1.plot(x, [number(r["instability"]) for r in sel], color=f"C{i % 10}", label=m)
-        ax2.plot(x, capped([number(r["psnr_db"]) for r in sel]), color=f"C{i % 10}", label=m)
+        ax2.plot(x, capped([number(r["psnr_db"]) for r in sel], among=every_psnr), color=f"C{i % 10}", label=m)
         ax3.plot(x, [number(r["frame_ms"]) for r in sel], color=f"C{i % 10}", label=m)
     ax1.set_ylabel("instability (linear luminance)")
     ax1.set_title("temporal instability: change beyond the reference's own (lower is better)")

@@ -92,9 +92,10 @@ struct OcclusionTraversal::Impl {
         TransformMetric metric;
         Frustum frustum;
         std::uint64_t instancePath;
-        std::uint64_t prototypeTriangles; ///< of the prototype it places (0: the instance level)
-        std::uint32_t listBatch;          ///< the batch it was last added to (kNone: none yet)
-        std::uint32_t listIndex;          ///< its index in that batch's transforms
+        /** The prototype it places (nullptr: the instance level). */
+        const storage::PrototypeRecord* prototype;
+        std::uint32_t listBatch; ///< the batch it was last added to (kNone: none yet)
+        std::uint32_t listIndex; ///< its index in that batch's transforms
     };
     /** A node waiting in the front-to-back queue. */
     struct Entry {
@@ -168,6 +169,9 @@ struct OcclusionTraversal::Impl {
     bool worthTesting(const Entry& entry) const;
     /** Triangles below the node, estimated from its prototype's count and its level. */
     std::uint64_t estimatedTriangles(const Entry& entry) const;
+    /** The prototype whose hierarchy the node is in, or an instance node places (nullptr: a
+     *  cell of the instance level). */
+    const storage::PrototypeRecord* prototypeBelow(const Entry& entry) const;
     void reportCycle();
     void queueForTest(const Tested& node);
     void issueQueued();
@@ -181,7 +185,9 @@ struct OcclusionTraversal::Impl {
             std::uint32_t parent,
             std::uint32_t depth);
     std::uint32_t addTransform(
-            const glm::mat4& matrix, std::uint64_t instancePath, std::uint64_t prototypeTriangles);
+            const glm::mat4& matrix,
+            std::uint64_t instancePath,
+            const storage::PrototypeRecord* prototype);
     std::uint32_t listIndex(std::uint32_t transform);
     void markVisible(std::uint32_t slot);
     /** A cube (or a deferred node's) for pass 2 below currentSlot: pulled up like visibility. */
@@ -286,7 +292,7 @@ Status OcclusionTraversal::Impl::traverse(
     ++batchNumber;
 
     // Pass 1: opaque geometry, front to back, with occlusion tests.
-    addTransform(glm::mat4(1.0f), 0, 0);
+    addTransform(glm::mat4(1.0f), 0, nullptr);
     const storage::NodeRef rootRef = scene.header().root;
     storage::NodeRecord root{};
     if (nodePages.readNode(rootRef, detail::kTopPriority, root) != Fetch::Ready) {
@@ -362,7 +368,9 @@ Status OcclusionTraversal::Impl::traverse(
 }
 
 std::uint32_t OcclusionTraversal::Impl::addTransform(
-        const glm::mat4& matrix, std::uint64_t instancePath, std::uint64_t prototypeTriangles) {
+        const glm::mat4& matrix,
+        std::uint64_t instancePath,
+        const storage::PrototypeRecord* prototype) {
     const glm::vec3 localEye = glm::vec3(glm::inverse(matrix) * glm::vec4(frame->camera.eye, 1.0f));
     transforms.push_back(
             {matrix,
@@ -370,7 +378,7 @@ std::uint32_t OcclusionTraversal::Impl::addTransform(
              TransformMetric(matrix),
              Frustum(viewProjection * matrix),
              instancePath,
-             prototypeTriangles,
+             prototype,
              kNone,
              0});
     return static_cast<std::uint32_t>(transforms.size() - 1);
@@ -463,7 +471,7 @@ void OcclusionTraversal::Impl::process(const Entry& entry) {
         return;
     }
     // A prototype's root has its instance's box: the instance node was the test.
-    const bool prototypeRoot = node.level == 0 && t.prototypeTriangles > 0;
+    const bool prototypeRoot = node.level == 0 && t.prototype != nullptr;
     const auto it = history.find(key);
     const bool visibleLastFrame = frame->occlusion.coherent && it != history.end() &&
                                   it->second.lastVisible + 1 >= frameNumber;
@@ -691,7 +699,7 @@ bool OcclusionTraversal::Impl::enterInstance(
     transform = addTransform(
             parent.matrix * detail::instanceTransform(instance),
             childInstancePath(parent.instancePath, instanceIndex),
-            prototype.triangleCount);
+            &prototype);
     return true;
 }
 
@@ -805,29 +813,40 @@ void OcclusionTraversal::Impl::drawSubtree(
             });
 }
 
+const storage::PrototypeRecord* OcclusionTraversal::Impl::prototypeBelow(const Entry& entry) const {
+    if (!detail::isCell(entry.record))
+        return &scene.prototypes()[scene.instances()[entry.record.geometryPage].prototype];
+    return transforms[entry.transform].prototype;
+}
+
 std::uint64_t OcclusionTraversal::Impl::estimatedTriangles(const Entry& entry) const {
-    const storage::NodeRecord& node = entry.record;
-    if (!detail::isCell(node)) {
-        const storage::InstanceRecord& instance = scene.instances()[node.geometryPage];
-        return scene.prototypes()[instance.prototype].triangleCount;
-    }
-    const std::uint64_t prototypeTriangles = transforms[entry.transform].prototypeTriangles;
-    if (prototypeTriangles == 0) // the instance level: its cells hold whole instances
+    const storage::PrototypeRecord* prototype = prototypeBelow(entry);
+    if (!prototype) // the instance level: its cells hold whole instances
         return std::numeric_limits<std::uint64_t>::max() / 1024;
+    if (!detail::isCell(entry.record))
+        return prototype->triangleCount;
     // What lies below a node of a prototype's hierarchy, as if its triangles were a surface
     // split evenly four ways a level (a volume splits eight ways: this errs towards testing).
-    const unsigned shift = std::min(2u * node.level, 62u);
-    return prototypeTriangles >> shift;
+    const unsigned shift = std::min(2u * entry.record.level, 62u);
+    return prototype->triangleCount >> shift;
 }
 
 bool OcclusionTraversal::Impl::worthTesting(const Entry& entry) const {
-    const auto least = static_cast<float>(frame->occlusion.minTestTriangles);
-    // Seen small, a subtree is cut into at most (size / ε)² cubes: too few to pay for a test
-    // (or for the walk's state), whatever it holds.
-    const float epsilon = frame->selection.epsilonPixels;
-    if (epsilon > 0.0f && entry.projected < epsilon * std::sqrt(least))
-        return false;
-    return static_cast<float>(estimatedTriangles(entry)) >= least;
+    const auto least = static_cast<double>(frame->occlusion.minTestTriangles);
+    double below = static_cast<double>(estimatedTriangles(entry));
+    // Seen small, a subtree is cut at ε: at most (size / ε)² cells of it are drawn, each a cube
+    // or a leaf's few triangles (its prototype's triangles per node).
+    const storage::PrototypeRecord* prototype = prototypeBelow(entry);
+    const double epsilon = frame->selection.epsilonPixels;
+    if (prototype && epsilon > 0.0) {
+        const double perNode = std::max(
+                1.0,
+                static_cast<double>(prototype->triangleCount) /
+                        static_cast<double>(std::max<std::uint64_t>(prototype->nodeCount, 1)));
+        const double cells = static_cast<double>(entry.projected) / epsilon;
+        below = std::min(below, cells * cells * perNode);
+    }
+    return below >= least;
 }
 
 void OcclusionTraversal::Impl::reportCycle() {
