@@ -160,7 +160,9 @@ Status runPath(const PathParams& p, const Scenario& scenario, const BenchOptions
             frameContext.occlusion = method.occlusion;
             frameContext.timeSeconds = path->frameTime(f);
             frameContext.budgets.pageInstallsPerFrame = static_cast<std::size_t>(p.cache.uploadsPerFrame);
-            FF_ASSIGN_OR_RETURN(runtime::Frame frame, session->render(frameContext));
+            FF_ASSIGN_OR_RETURN(
+                    runtime::Frame frame,
+                    method.oracle ? session->renderOracle(frameContext) : session->render(frameContext));
             runtime::FrameTelemetry telemetry = session->lastFrame();
             const runtime::Image& reference = references[static_cast<std::size_t>(f)];
             FF_ASSIGN_OR_RETURN(
@@ -223,7 +225,7 @@ Status runPath(const PathParams& p, const Scenario& scenario, const BenchOptions
                  formatNumber(runtime::percentile(frameMs, 0.99), 3),
                  std::to_string(debtFrames),
                  std::to_string(session->totals().bytesRead),
-                 method.occlusion.enabled ? "on" : "off",
+                 method.oracle ? "oracle" : method.occlusion.enabled ? "on" : "off",
                  method.occlusion.coherent ? "on" : "off",
                  formatNumber(mean(frameMs), 3),
                  formatNumber(sums.select / n, 3),

@@ -152,17 +152,20 @@ Status setMethodKey(MethodSpec& method, const std::string& key, const nlohmann::
         method.selection.maxCubeAnisotropy = value.get<float>();
         return Status::ok();
     }
-    if (key == "occlusion" || key == "coherence") {
+    if (key == "occlusion" || key == "coherence" || key == "oracle") {
         if (!value.is_boolean())
             return Status(ErrorCode::InvalidArgument, key + ": expected true or false, got " + value.dump());
-        (key == "occlusion" ? method.occlusion.enabled : method.occlusion.coherent) = value.get<bool>();
+        bool& flag = key == "occlusion" ? method.occlusion.enabled
+                     : key == "coherence" ? method.occlusion.coherent
+                                          : method.oracle;
+        flag = value.get<bool>();
         return Status::ok();
     }
     return Status(
             ErrorCode::InvalidArgument,
             "\"" + key +
                     "\" is not a method key a sweep can vary (eps, cube_draw, cube_anisotropy, occlusion, "
-                    "coherence)");
+                    "coherence, oracle)");
 }
 
 std::vector<MethodSpec> readMethods(ScenarioReader& reader) {

@@ -68,6 +68,8 @@ struct MethodSpec {
     std::string label;
     runtime::SelectionOptions selection;
     runtime::OcclusionOptions occlusion;
+    /** Drawn by the occlusion oracle (StreamingSession::renderOracle): every page mapped. */
+    bool oracle = false;
 
     bool isFull() const noexcept { return selection.method == runtime::Method::Full; }
     /** "full" / "hierarchical" */
@@ -77,7 +79,7 @@ struct MethodSpec {
 };
 
 /** Method keys a sweep may vary (the others, label and method, name what is swept). */
-inline constexpr const char* kSweepableMethodKeys[] = {"eps", "cube_draw", "cube_anisotropy", "occlusion", "coherence"};
+inline constexpr const char* kSweepableMethodKeys[] = {"eps", "cube_draw", "cube_anisotropy", "occlusion", "coherence", "oracle"};
 
 /** Reads "methods" (a non-empty array; labels unique); errors go to the reader. */
 std::vector<MethodSpec> readMethods(ScenarioReader& reader);

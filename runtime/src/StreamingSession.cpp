@@ -83,6 +83,8 @@ struct StreamingSession::Impl {
     std::int64_t frames = 0;
     std::uint64_t peakResidentBytes = 0;
     std::vector<Status> failures; ///< first met during the last frame call
+    /** Where the frame's batches go instead of the renderer (the oracle's filter). */
+    IDrawSink* sinkOverride = nullptr;
 
     /** pump → traverse → draw → finish → prefetch, inside one page-access frame. */
     template <typename Finish>
@@ -211,8 +213,9 @@ Status StreamingSession::Impl::frame(
     const bool culls =
             context.occlusion.enabled && context.selection.method == Method::Hierarchical;
     ITraversal& walker = culls ? static_cast<ITraversal&>(*occlusionTraversal) : *traversal;
+    IDrawSink& sink = sinkOverride ? *sinkOverride : static_cast<IDrawSink&>(*renderer);
     const Status walked =
-            walker.traverse(context, {*renderer, visibility, *renderer, renderer.get()}, stats);
+            walker.traverse(context, {sink, visibility, *renderer, renderer.get()}, stats);
     const auto& fresh = walker.newFailures();
     failures.insert(failures.end(), fresh.begin(), fresh.end());
     FF_RETURN_IF_ERROR(walked);
@@ -295,6 +298,85 @@ Result<Frame> StreamingSession::render(const FrameContext& context) {
     FF_RETURN_IF_ERROR(s.call(context, result.stats, [&](double& prefetchMs, bool&) {
         return s.frameToImage(context, result, prefetchMs);
     }));
+    return result;
+}
+
+namespace {
+
+/** Draws through the renderer and keeps a copy of every batch (the oracle's first drawing). */
+class KeepingSink final : public IDrawSink {
+public:
+    explicit KeepingSink(Renderer& renderer) : mRenderer(renderer) {}
+    Status draw(const DrawList& batch, FrameStats& stats) override {
+        batches.push_back(batch);
+        return mRenderer.draw(batch, stats);
+    }
+    std::vector<DrawList> batches;
+
+private:
+    Renderer& mRenderer;
+};
+
+/** Draws each batch with only the geometry runs the oracle found visible. The walk is
+ *  deterministic, so batch k is the first drawing's batch k; one that is not is drawn whole. */
+class VisibleOnlySink final : public IDrawSink {
+public:
+    VisibleOnlySink(Renderer& renderer, const std::vector<std::vector<bool>>& visible)
+        : mRenderer(renderer), mVisible(visible) {}
+    Status draw(const DrawList& batch, FrameStats& stats) override {
+        const std::size_t k = mNext++;
+        if (k >= mVisible.size() || mVisible[k].size() != batch.geometry.size())
+            return mRenderer.draw(batch, stats);
+        mScratch = batch;
+        std::size_t kept = 0;
+        for (std::size_t i = 0; i < batch.geometry.size(); ++i) {
+            if (mVisible[k][i])
+                mScratch.geometry[kept++] = batch.geometry[i];
+            else
+                stats.trianglesDrawn -= batch.geometry[i].triangleCount; // counted by the walk
+        }
+        stats.geometryDraws -= batch.geometry.size() - kept;
+        mScratch.geometry.resize(kept);
+        return mRenderer.draw(mScratch, stats);
+    }
+
+private:
+    Renderer& mRenderer;
+    const std::vector<std::vector<bool>>& mVisible;
+    std::size_t mNext = 0;
+    DrawList mScratch;
+};
+
+} // namespace
+
+Result<Frame> StreamingSession::renderOracle(const FrameContext& context) {
+    Impl& s = *mImpl;
+    if (s.cache)
+        return Status(ErrorCode::InvalidArgument, "the occlusion oracle needs every page mapped (no --cache-mb)");
+    FrameContext plain = context;
+    plain.occlusion.enabled = false;
+    // What shows: the frame drawn whole, then each geometry run asked about.
+    std::vector<std::vector<bool>> visible;
+    {
+        FrameStats ignored;
+        KeepingSink keeping(*s.renderer);
+        s.sinkOverride = &keeping;
+        Frame first;
+        double prefetchMs = 0.0;
+        const Status drawn = s.frameToImage(plain, first, prefetchMs);
+        s.sinkOverride = nullptr;
+        FF_RETURN_IF_ERROR(drawn);
+        for (const DrawList& batch : keeping.batches)
+            visible.push_back(s.renderer->visibleRuns(batch));
+    }
+    VisibleOnlySink visibleOnly(*s.renderer, visible);
+    Frame result;
+    s.sinkOverride = &visibleOnly;
+    const Status drawn = s.call(plain, result.stats, [&](double& prefetchMs, bool&) {
+        return s.frameToImage(plain, result, prefetchMs);
+    });
+    s.sinkOverride = nullptr;
+    FF_RETURN_IF_ERROR(drawn);
     return result;
 }
 

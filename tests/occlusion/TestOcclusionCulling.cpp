@@ -180,6 +180,19 @@ TEST_F(OcclusionCullingTest, WhatIsBehindAWallNeverReachesGl) {
     }
 }
 
+TEST_F(OcclusionCullingTest, TheOracleDrawsExactlyWhatShows) {
+    open(buildWallAndStatue(freshDir()));
+    const Camera front = Camera::lookAt({0, 0, 12}, {0, 0, 0}, {0, 1, 0}, 0.8f);
+    auto reference = mPlain->render(frame(front, 1.0f, false));
+    ASSERT_TRUE(reference.isOk());
+    auto oracle = mPlain->renderOracle(frame(front, 1.0f, false));
+    ASSERT_TRUE(oracle.isOk()) << oracle.status().toString();
+    // The wall (one run of 12 triangles: the oracle knows runs, not triangles), not the statue.
+    EXPECT_EQ(reference->stats.trianglesDrawn, kWallTriangles + kStatueTriangles);
+    EXPECT_EQ(oracle->stats.trianglesDrawn, kWallTriangles);
+    EXPECT_EQ(differingPixels(oracle->image, reference->image), 0u);
+}
+
 TEST_F(OcclusionCullingTest, HistoryNeverHidesWhatJustCameIntoView) {
     open(buildWallAndStatue(freshDir()));
     const Camera front = Camera::lookAt({0, 0, 12}, {0, 0, 0}, {0, 1, 0}, 0.8f);

@@ -62,13 +62,20 @@ CLI::Option* addBackgroundOption(CLI::App& cmd, std::string& background) {
             ->capture_default_str();
 }
 
-void addOcclusionOptions(CLI::App& cmd, runtime::OcclusionOptions& occlusion) {
+void addOcclusionOptions(CLI::App& cmd, runtime::OcclusionOptions& occlusion, bool* oracle) {
     cmd.add_option_function<std::string>(
                "--occlusion",
-               [&occlusion](const std::string& mode) { occlusion.enabled = mode == "on"; },
-               "Occlusion culling: test boxes against what is drawn, front to back, before "
-               "drawing what they hold (on) or not (off)")
-            ->check(CLI::IsMember({"off", "on"}))
+               [&occlusion, oracle](const std::string& mode) {
+                   occlusion.enabled = mode == "on";
+                   if (oracle)
+                       *oracle = mode == "oracle";
+               },
+               oracle ? "Occlusion culling: test boxes against what is drawn, front to back, before "
+                        "drawing what they hold (on), not (off), or draw exactly what an ID pass "
+                        "found visible (oracle: the bound of what culling can save; every page mapped)"
+                      : "Occlusion culling: test boxes against what is drawn, front to back, before "
+                        "drawing what they hold (on) or not (off)")
+            ->check(oracle ? CLI::IsMember({"off", "on", "oracle"}) : CLI::IsMember({"off", "on"}))
             ->default_str(occlusion.enabled ? "on" : "off");
     cmd.add_option(
                "--occlusion-queries",

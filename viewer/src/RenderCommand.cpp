@@ -34,6 +34,7 @@ struct RenderArgs {
     std::string gpuBudget = "512MiB";
     bool coverage = false;
     runtime::OcclusionOptions occlusion;
+    bool oracle = false;
     runtime::CameraOptions camera;
 };
 
@@ -91,7 +92,7 @@ int runRender(const RenderArgs& args) {
     Result<runtime::Frame> frame = Status(ErrorCode::Internal, "no frame rendered");
     std::vector<Status> failures;
     for (int f = 0; f < args.frames; ++f) {
-        frame = (*session)->render(frameContext);
+        frame = args.oracle ? (*session)->renderOracle(frameContext) : (*session)->render(frameContext);
         if (!frame)
             return reportError("render", frame.status().withContext(args.scene));
         const auto& fresh = (*session)->newFailures();
@@ -109,7 +110,7 @@ int runRender(const RenderArgs& args) {
         const nlohmann::json out = {{"scene", args.scene},
                                     {"method", args.method},
                                     {"epsilon", args.epsilon},
-                                    {"occlusion", args.occlusion.enabled},
+                                    {"occlusion", args.oracle ? "oracle" : args.occlusion.enabled ? "on" : "off"},
                                     {"width", size->x},
                                     {"height", size->y},
                                     {"supersample", args.supersample},
@@ -136,7 +137,7 @@ CommandRunner addRenderCommand(CLI::App& app) {
     addMethodOption(*cmd, args->method);
     addCubeDrawOption(*cmd, args->cubeDraw);
     addCubeAnisotropyOption(*cmd, args->cubeAnisotropy);
-    addOcclusionOptions(*cmd, args->occlusion);
+    addOcclusionOptions(*cmd, args->occlusion, &args->oracle);
     cmd->add_option("--supersample", args->supersample, "Render NxN samples per pixel (a reference)")->capture_default_str();
     cmd->add_option("--frames", args->frames, "Render the view this many times (timing; first frame uploads)")->capture_default_str();
     cmd->add_option("--stats", args->stats, "Write the per-frame statistics as JSON here (also printed on stdout)");

@@ -442,6 +442,51 @@ Status Renderer::draw(const DrawList& batch, FrameStats& stats) {
     return Status::ok();
 }
 
+std::vector<bool> Renderer::visibleRuns(const DrawList& batch) {
+    Impl& s = *mImpl;
+    std::vector<bool> visible(batch.geometry.size(), true);
+    glBindFramebuffer(GL_FRAMEBUFFER, s.framebuffer); // the finished frame's depth
+    glViewport(0, 0, s.frameWidth * s.frameSupersample, s.frameHeight * s.frameSupersample);
+    s.ringSlot = (s.ringSlot + 1) % Impl::kBatchBufferSets;
+    s.uploadTransforms(batch);
+    glUseProgram(s.geometryProgram);
+    glUniformMatrix4fv(glGetUniformLocation(s.geometryProgram, "uViewProjection"), 1, GL_FALSE,
+                       glm::value_ptr(s.frameViewProjection));
+    glBindVertexArray(s.geometryVao);
+    glColorMask(GL_FALSE, GL_FALSE, GL_FALSE, GL_FALSE);
+    glDepthMask(GL_FALSE);
+    glDepthFunc(GL_EQUAL);
+    std::vector<GLuint> queries(batch.geometry.size(), 0);
+    glGenQueries(static_cast<GLsizei>(queries.size()), queries.data());
+    for (std::size_t i = 0; i < batch.geometry.size(); ++i) {
+        const GeometryDraw& draw = batch.geometry[i];
+        const auto slot = s.slotOfPage.find(draw.page);
+        if (slot == s.slotOfPage.end())
+            continue;
+        glBeginQuery(GL_ANY_SAMPLES_PASSED, queries[i]);
+        glDrawArraysInstancedBaseInstance(
+                GL_TRIANGLES,
+                static_cast<GLint>(slot->second * s.verticesPerSlot + draw.firstTriangle * 3),
+                static_cast<GLsizei>(draw.triangleCount * 3),
+                1,
+                draw.transform);
+        glEndQuery(GL_ANY_SAMPLES_PASSED);
+    }
+    for (std::size_t i = 0; i < batch.geometry.size(); ++i) {
+        if (!s.slotOfPage.contains(batch.geometry[i].page))
+            continue;
+        GLuint passed = 0;
+        glGetQueryObjectuiv(queries[i], GL_QUERY_RESULT, &passed);
+        visible[i] = passed != 0;
+    }
+    glDeleteQueries(static_cast<GLsizei>(queries.size()), queries.data());
+    glBindFramebuffer(GL_FRAMEBUFFER, 0);
+    glDepthFunc(GL_LESS);
+    glDepthMask(GL_TRUE);
+    glColorMask(GL_TRUE, GL_TRUE, GL_TRUE, GL_TRUE);
+    return visible;
+}
+
 QueryTicket Renderer::issue(std::span<const OcclusionBox> group) {
     return mImpl->queries->issue(group);
 }

@@ -13,6 +13,7 @@
 
 #include <cstdint>
 #include <memory>
+#include <vector>
 
 namespace ff::runtime {
 
@@ -82,6 +83,14 @@ public:
      * wait for the GPU (drawMs counts submission only).
      */
     [[nodiscard]] Status finishPresent(FrameStats& stats);
+
+    /**
+     * The oracle's question, asked after a frame's every batch was drawn: which of `batch`'s
+     * geometry runs show at least one sample in the finished depth buffer (each run drawn again
+     * inside an occlusion query with the depth test at ==, nothing written; the same shader and
+     * inputs give the same depths). A run whose page is no longer on the GPU counts as visible.
+     */
+    [[nodiscard]] std::vector<bool> visibleRuns(const DrawList& batch);
 
     /** Bytes of the GPU page arena holding geometry pages now (at most the GPU budget). */
     [[nodiscard]] std::uint64_t residentBytes() const noexcept;

@@ -97,6 +97,14 @@ public:
     [[nodiscard]] Result<Frame> renderComplete(const FrameContext& frame);
     /** One frame into the default framebuffer (a window's back buffer), no readback. */
     [[nodiscard]] Result<FrameStats> present(const FrameContext& frame);
+    /**
+     * The occlusion oracle (benchmarks): the frustum-culled frame drawn once, untimed, to learn
+     * which geometry runs show at least one sample (Renderer::visibleRuns), then drawn again with
+     * exactly those and the same cubes. The frame returned, its stats and telemetry are the
+     * second drawing's: what exact occlusion culling would cost, with the knowledge for free.
+     * Needs every page mapped (a session without a cache). Errors: InvalidArgument with a cache.
+     */
+    [[nodiscard]] Result<Frame> renderOracle(const FrameContext& frame);
 
     /**
      * Prefetch along the camera's motion: after each following frame, the traversal also runs
