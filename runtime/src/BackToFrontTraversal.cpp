@@ -157,23 +157,23 @@ void BackToFrontTraversal::defer(
 void BackToFrontTraversal::visit(
         const storage::NodeRecord& node, storage::NodeRef ref, std::size_t active, int depth) {
     if (depth > kMaxNesting) {
-        mNodePages->reportFailure(
-                Status(ErrorCode::Corrupt,
-                       "node nesting deeper than " + std::to_string(kMaxNesting) +
-                               " levels: the hierarchy has a reference cycle"));
+        mNodePages->reportFailure(detail::nestingTooDeep());
         return;
     }
-    ++mStats->nodesVisited;
     const ActiveTransform& frame = mActive[active];
-    if (!frame.frustum.intersects(toVec3(node.boundsMin), toVec3(node.boundsMax))) {
-        ++mStats->nodesCulled;
-        return;
-    }
-
     const SelectionOptions& options = mFrame->selection;
-    const float projected = detail::projectedPixels(
-            node, frame.localEye, frame.metric, mFrame->camera, mPixelScale);
-    if (detail::drawnAsCube(node, projected, options)) {
+    float projected = 0.0f;
+    const detail::Verdict verdict = detail::classify(
+            node,
+            {frame.frustum, frame.localEye, frame.metric},
+            mFrame->camera,
+            mPixelScale,
+            options,
+            *mStats,
+            projected);
+    if (verdict == detail::Verdict::Culled)
+        return;
+    if (verdict == detail::Verdict::Cube) {
         emitCube(node, ref, active);
         return;
     }

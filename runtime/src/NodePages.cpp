@@ -96,6 +96,30 @@ std::size_t mergeGeometryDraws(std::vector<GeometryDraw>& draws) {
     return out;
 }
 
+Verdict classify(
+        const storage::NodeRecord& node,
+        const NodeFrame& where,
+        const Camera& camera,
+        float pixelScale,
+        const SelectionOptions& options,
+        FrameStats& stats,
+        float& projected) {
+    ++stats.nodesVisited;
+    if (!where.frustum.intersects(toVec3(node.boundsMin), toVec3(node.boundsMax))) {
+        ++stats.nodesCulled;
+        return Verdict::Culled;
+    }
+    projected = projectedPixels(node, where.localEye, where.metric, camera, pixelScale);
+    return drawnAsCube(node, projected, options) ? Verdict::Cube : Verdict::Refine;
+}
+
+Status nestingTooDeep() {
+    return Status(
+            ErrorCode::Corrupt,
+            "node nesting deeper than " + std::to_string(kMaxNesting) +
+                    " levels: the hierarchy has a reference cycle");
+}
+
 void NodePages::reportFailure(const Status& failure) {
     // Corrupt messages start with "page N: ", so equal messages are the same page's failure.
     if (mReported.insert(failure.message()).second)

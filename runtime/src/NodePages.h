@@ -7,6 +7,7 @@
 #include <ff/runtime/Camera.h>
 #include <ff/runtime/DrawList.h>
 #include <ff/runtime/FrameStats.h>
+#include <ff/runtime/Frustum.h>
 #include <ff/runtime/PageAccess.h>
 #include <ff/runtime/Selection.h>
 #include <ff/runtime/TransformMetric.h>
@@ -50,6 +51,31 @@ float projectedPixels(
 
 /** Whether the ε rule draws the node as its cube at `projected` pixels. */
 bool drawnAsCube(const storage::NodeRecord& node, float projected, const SelectionOptions& options);
+
+/** What a walk does with a node it reaches, the same in every traversal. */
+enum class Verdict { Culled, Cube, Refine };
+
+/** Where a node's frame of reference puts it for the ε rule and the frustum test. */
+struct NodeFrame {
+    const Frustum& frustum;
+    const glm::vec3& localEye;
+    const TransformMetric& metric;
+};
+
+/** Counts the node as visited (and culled), then: outside the frustum, drawn as its cube, or to
+ *  be refined; `projected` gets the ε rule's measure. Reports a reference cycle past
+ *  kMaxNesting (Culled). */
+Verdict classify(
+        const storage::NodeRecord& node,
+        const NodeFrame& where,
+        const Camera& camera,
+        float pixelScale,
+        const SelectionOptions& options,
+        FrameStats& stats,
+        float& projected);
+
+/** The failure a hierarchy nesting deeper than kMaxNesting reports. */
+Status nestingTooDeep();
 
 /** Sorts a batch's geometry by transform and page and merges runs that continue one another
  *  (far fewer draw commands; the same triangles in the same order whatever the walk's order,

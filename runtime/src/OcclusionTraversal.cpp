@@ -173,6 +173,7 @@ struct OcclusionTraversal::Impl {
      *  cell of the instance level). */
     const storage::PrototypeRecord* prototypeBelow(const Entry& entry) const;
     void reportCycle();
+    detail::Verdict classify(const storage::NodeRecord& node, const Transform& t, float& projected);
     void queueForTest(const Tested& node);
     void issueQueued();
     void answer(const Query& query, bool visible);
@@ -415,15 +416,12 @@ void OcclusionTraversal::Impl::pushChild(
         std::uint32_t depth) {
     // The frustum and the ε rule are decided here, not when the node leaves the queue: most
     // nodes of a far field are culled or cubes, and those never enter it.
-    ++stats->nodesVisited;
     const Transform& t = transforms[transform];
-    if (!t.frustum.intersects(toVec3(record.boundsMin), toVec3(record.boundsMax))) {
-        ++stats->nodesCulled;
+    float projected = 0.0f;
+    const detail::Verdict verdict = classify(record, t, projected);
+    if (verdict == detail::Verdict::Culled)
         return;
-    }
-    const float projected =
-            detail::projectedPixels(record, t.localEye, t.metric, frame->camera, pixelScale);
-    if (detail::drawnAsCube(record, projected, frame->selection)) {
+    if (verdict == detail::Verdict::Cube) {
         // Pass 2 draws it. A cube costs less to draw than to test and writes no depth: it is
         // neither tested nor remembered, only seen (its parent stays visible).
         currentSlot = parent;
@@ -785,15 +783,11 @@ void OcclusionTraversal::Impl::drawSubtree(
         reportCycle();
         return;
     }
-    ++stats->nodesVisited;
-    const Transform& t = transforms[transform];
-    if (!t.frustum.intersects(toVec3(node.boundsMin), toVec3(node.boundsMax))) {
-        ++stats->nodesCulled;
+    float projected = 0.0f;
+    const detail::Verdict verdict = classify(node, transforms[transform], projected);
+    if (verdict == detail::Verdict::Culled)
         return;
-    }
-    const float projected =
-            detail::projectedPixels(node, t.localEye, t.metric, frame->camera, pixelScale);
-    if (detail::drawnAsCube(node, projected, frame->selection)) {
+    if (verdict == detail::Verdict::Cube) {
         sawCube();
         return;
     }
@@ -850,10 +844,19 @@ bool OcclusionTraversal::Impl::worthTesting(const Entry& entry) const {
 }
 
 void OcclusionTraversal::Impl::reportCycle() {
-    nodePages.reportFailure(
-            Status(ErrorCode::Corrupt,
-                   "node nesting deeper than " + std::to_string(detail::kMaxNesting) +
-                           " levels: the hierarchy has a reference cycle"));
+    nodePages.reportFailure(detail::nestingTooDeep());
+}
+
+detail::Verdict OcclusionTraversal::Impl::classify(
+        const storage::NodeRecord& node, const Transform& t, float& projected) {
+    return detail::classify(
+            node,
+            {t.frustum, t.localEye, t.metric},
+            frame->camera,
+            pixelScale,
+            frame->selection,
+            *stats,
+            projected);
 }
 
 void OcclusionTraversal::Impl::rememberSlots() {

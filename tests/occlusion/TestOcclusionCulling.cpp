@@ -3,6 +3,8 @@
 // except for pixels where two surfaces tie in depth); history never hides what just came into
 // view; a cold streaming cache is not waited for.
 
+#include "TestDir.h"
+
 #include <ff/builder/Generators.h>
 #include <ff/builder/SceneBuilder.h>
 #include <ff/runtime/CameraOptions.h>
@@ -26,14 +28,7 @@ namespace fs = std::filesystem;
 /** Pixels where surfaces tie in depth may differ with draw order: 0.01 % beyond those. */
 constexpr double kTiedPixelShare = 1e-4;
 
-fs::path freshDir() {
-    const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
-    const fs::path dir =
-            fs::path(FF_TEST_TMP_DIR) / (std::string(info->test_suite_name()) + "." + info->name());
-    fs::remove_all(dir);
-    fs::create_directories(dir);
-    return dir;
-}
+using test::freshDir;
 
 std::size_t differingPixels(const Image& a, const Image& b) {
     EXPECT_EQ(a.width, b.width);
