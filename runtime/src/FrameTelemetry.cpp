@@ -92,7 +92,7 @@ const std::vector<Column>& columns() {
              [](T t) { return count(t.stats.nodesVisited); }},
             {{"nodes_culled", "nodes outside the frustum"},
              [](T t) { return count(t.stats.nodesCulled); }},
-            {{"nodes_occluded", "nodes the renderer saw occluded"},
+            {{"nodes_occluded", "nodes an occlusion test found hidden"},
              [](T t) { return count(t.stats.nodesOccluded); }},
             {{"instances_entered", "instances refined into their prototype"},
              [](T t) { return count(t.stats.instancesEntered); }},
