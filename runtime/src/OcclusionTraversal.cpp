@@ -236,6 +236,7 @@ struct OcclusionTraversal::Impl {
     };
     std::vector<ChildRecord> children; ///< expandCell's stack of decoded children
     bool cubesSeen = false;            ///< pass 1 met a node drawn as its cube: pass 2 has work
+    Status sinkStatus;                 ///< the first error the renderer reported this frame
     std::uint32_t currentSlot = kNone; ///< the slotted node whose subtree pass 1 is expanding
     std::vector<OcclusionBox> boxes;
 };
@@ -282,6 +283,7 @@ Status OcclusionTraversal::Impl::traverse(
     viewProjection = frame->camera.projection(aspect) * view;
     depthWritten = false;
     cubesSeen = false;
+    sinkStatus = Status::ok();
     list.clear();
     transforms.clear();
     queue.clear();
@@ -365,7 +367,7 @@ Status OcclusionTraversal::Impl::traverse(
                 return f.message() == failure.message();
             }) == failures.end())
             failures.push_back(failure);
-    return drawn;
+    return sinkStatus.isOk() ? drawn : sinkStatus;
 }
 
 std::uint32_t OcclusionTraversal::Impl::addTransform(
@@ -400,9 +402,8 @@ void OcclusionTraversal::Impl::flush() {
     if (list.geometry.empty())
         return;
     stats->geometryDraws += detail::mergeGeometryDraws(list.geometry);
-    const Status status = services->sink.draw(list, *stats);
-    if (!status)
-        nodePages.reportFailure(status);
+    if (const Status status = services->sink.draw(list, *stats); !status && sinkStatus.isOk())
+        sinkStatus = status; // the frame is finished, then the error returned (as back to front)
     list.clear();
     ++batchNumber;
     depthWritten = true;
