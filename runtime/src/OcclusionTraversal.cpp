@@ -15,7 +15,6 @@
 #include <deque>
 #include <limits>
 #include <unordered_map>
-#include <unordered_set>
 
 namespace ff::runtime {
 
@@ -256,10 +255,6 @@ const std::vector<Status>& OcclusionTraversal::newFailures() const noexcept {
 
 const IVisibility& OcclusionTraversal::history() const noexcept {
     return mImpl->historyView;
-}
-
-std::size_t OcclusionTraversal::historySize() const noexcept {
-    return mImpl->history.size();
 }
 
 Status OcclusionTraversal::Impl::traverse(

@@ -55,8 +55,6 @@ public:
     /** The last answers: Occluded for nodes hidden at their last test (a prefetch walk skips
      *  them, so what is hidden is not fetched ahead either). */
     [[nodiscard]] const IVisibility& history() const noexcept;
-    /** Nodes the history holds now. */
-    [[nodiscard]] std::size_t historySize() const noexcept;
 
 private:
     struct Impl;
