@@ -38,6 +38,7 @@ const std::vector<generators::GeneratorEntry>& registry() {
             generators::sphereGenerator(),
             generators::cityGenerator(),
             generators::cathedralGenerator(),
+            generators::isosurfaceGenerator(),
     };
     return kEntries;
 }

@@ -1,5 +1,6 @@
 #include "InstanceLevel.h"
 
+#include "Decomposition.h"
 #include "SubtreeEncoder.h"
 
 #include <algorithm>
@@ -22,14 +23,15 @@ struct PlacedInstance {
     std::uint32_t prototype = 0;
 };
 
-class InstanceOctree {
+class InstanceHierarchy {
 public:
-    InstanceOctree(
+    InstanceHierarchy(
             std::vector<PlacedInstance> placed,
             const std::vector<PrototypeSummary>& summaries,
             const HierarchyParams& params)
         : mPlaced(std::move(placed))
         , mSummaries(summaries)
+        , mParams(params)
         , mBaker(params.bakeResolution) {
         mOrder.resize(mPlaced.size());
         std::iota(mOrder.begin(), mOrder.end(), 0u);
@@ -37,7 +39,24 @@ public:
 
     std::vector<BuildNode> run(const Cell& root) {
         mNodes.emplace_back();
-        buildCell(0, root, 0, mOrder.size(), 0, 0);
+        // ORSD decomposes voxel grids; instances have none, so their level is an octree.
+        if (mParams.decomposition == Decomposition::Octree || mParams.decomposition == Decomposition::Orsd) {
+            buildCell(0, root, 0, mOrder.size(), 0, 0);
+            return std::move(mNodes);
+        }
+        std::vector<SplitItem> items(mPlaced.size());
+        for (std::size_t i = 0; i < mPlaced.size(); ++i)
+            items[i] = {mPlaced[i].worldMin, mPlaced[i].worldMax, mPlaced[i].center};
+        // An instance is one item; a leaf holds about a group's worth of them.
+        DecompositionParams split = mParams.split;
+        split.minTriangles = kMaxGroupChildren;
+        split.maxTriangles = kMaxGroupChildren;
+        split.balancedMinTriangles = 2;
+        split.maxDepth = std::min(split.maxDepth, kMaxInstanceDepth);
+        const std::vector<SplitNode> nodes = decompose(items, mOrder, mParams.decomposition, split);
+        mNodes[0].cellMin = root.min;
+        mNodes[0].cellMax = root.max();
+        buildSplit(0, nodes, 0);
         return std::move(mNodes);
     }
 
@@ -94,6 +113,34 @@ private:
             ++child;
         }
         finishNode(index, begin, end);
+    }
+
+    // A node of a bounding-volume decomposition (Decomposition.h); `index`'s cell is set.
+    void buildSplit(std::size_t index, const std::vector<SplitNode>& split, std::size_t at) {
+        const SplitNode& s = split[at];
+        mDepth = std::max(mDepth, static_cast<std::uint32_t>(s.level));
+        BuildNode& node = mNodes[index];
+        node.level = static_cast<std::uint8_t>(s.level);
+        node.kind = static_cast<std::uint8_t>(storage::NodeKind::Cell);
+        if (s.childCount == 0) {
+            buildGroup(index, s.begin, s.end, s.level);
+            return;
+        }
+        const auto firstChild = static_cast<std::uint32_t>(mNodes.size());
+        node.firstChild = firstChild;
+        node.childCount = s.childCount;
+        mNodes.resize(mNodes.size() + s.childCount); // `node` is invalid from here
+        for (std::uint32_t c = 0; c < s.childCount; ++c) {
+            const SplitNode& child = split[s.firstChild + c];
+            if (child.end - child.begin == 1) {
+                buildInstance(firstChild + c, mOrder[child.begin], s.level + 1, 0);
+                continue;
+            }
+            mNodes[firstChild + c].cellMin = child.cellMin;
+            mNodes[firstChild + c].cellMax = child.cellMax;
+            buildSplit(firstChild + c, split, s.firstChild + c);
+        }
+        finishNode(index, s.begin, s.end);
     }
 
     // Instances that space cannot separate (same centre, or too deep): split the list instead.
@@ -171,6 +218,7 @@ private:
 
     std::vector<PlacedInstance> mPlaced;
     const std::vector<PrototypeSummary>& mSummaries;
+    const HierarchyParams& mParams;
     CubeBaker mBaker;
     std::vector<std::uint32_t> mOrder;
     std::vector<BuildNode> mNodes;
@@ -232,12 +280,12 @@ Result<InstanceLevelResult> buildInstanceLevel(
     const float edge = std::max({size.x, size.y, size.z});
     const Cell root{lo, edge * (1.0f + 1e-5f) + std::numeric_limits<float>::min()};
 
-    InstanceOctree octree(std::move(placed), summaries, params);
-    std::vector<BuildNode> nodes = octree.run(root);
+    InstanceHierarchy hierarchy(std::move(placed), summaries, params);
+    std::vector<BuildNode> nodes = hierarchy.run(root);
     InstanceLevelResult result;
     result.boundsMin = nodes[0].boundsMin;
     result.boundsMax = nodes[0].boundsMax;
-    result.depth = octree.depth();
+    result.depth = hierarchy.depth();
     EncodedSubtree encoded = encodeSubtree(std::move(nodes), {}, writer.pageSize());
     result.nodes = encoded.nodeCount;
     result.nodePages = encoded.nodePages.size();

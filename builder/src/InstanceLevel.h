@@ -22,8 +22,9 @@ struct InstanceLevelResult {
 };
 
 /**
- * Builds the instance-level hierarchy: an octree over the instances' world bounds whose leaves
- * are Instance nodes pointing at prototypes. Every node's color cube is baked from its
+ * Builds the instance-level hierarchy: an octree (or the bounding-volume decomposition
+ * `params.decomposition` names; ORSD builds the octree) over the instances' world bounds whose
+ * leaves are Instance nodes pointing at prototypes. Every node's color cube is baked from its
  * instances' prototype cells (a cut of the prototype hierarchy whose cells are about one bake
  * sample across), transformed into the world: instances are never expanded into triangles.
  */

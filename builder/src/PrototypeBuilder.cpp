@@ -1,5 +1,7 @@
 #include "PrototypeBuilder.h"
 
+#include "Decomposition.h"
+#include "HierarchyBuild.h"
 #include "LevelRegions.h"
 #include "SubtreeEncoder.h"
 
@@ -19,6 +21,7 @@ namespace {
 struct ChunkOutput {
     LevelledSubtree encoded;
     PrototypeSummary summary;
+    std::uint64_t leafNodes = 0;
 };
 
 /** A cell above the chunks of a partitioned prototype. */
@@ -67,24 +70,28 @@ void addToSummary(const BuildNode& node, PrototypeSummary& summary) {
         summary.cuts[static_cast<std::size_t>(l)].push_back({node.cellMin, node.cellMax, node.cube});
 }
 
-/** An octree as built, before its layout: what the tree above it and the report need. */
-struct BuiltOctree {
+/** A hierarchy as built, before its layout: what the tree above it and the report need. */
+struct BuiltHierarchy {
     std::vector<BuildNode> nodes; ///< nodes[0] is the root
     PrototypeSummary summary;
+    std::uint64_t leafNodes = 0;
 };
 
-// Builds one octree completely in memory. Runs on worker threads: touches only its arguments.
-BuiltOctree buildInMemoryOctree(
+// Builds one hierarchy completely in memory. Runs on worker threads: touches only its arguments.
+BuiltHierarchy buildInMemoryHierarchy(
         std::vector<storage::PackedTriangle>& triangles,
         const Cell& cell,
         int level,
         int octant,
-        const HierarchyParams& params) {
+        const HierarchyParams& params,
+        const VoxelGrid* grid) {
     CubeBaker baker(params.bakeResolution);
-    BuiltOctree out;
-    out.nodes = buildOctree(triangles, cell, level, octant, params, baker);
-    for (const BuildNode& node : out.nodes)
+    BuiltHierarchy out;
+    out.nodes = buildHierarchy(triangles, cell, level, octant, params, baker, grid);
+    for (const BuildNode& node : out.nodes) {
         addToSummary(node, out.summary);
+        out.leafNodes += node.childCount == 0 ? 1u : 0u;
+    }
     return out;
 }
 
@@ -94,11 +101,13 @@ ChunkOutput buildChunk(
         const Cell& cell,
         int level,
         int octant,
-        const HierarchyParams& params) {
-    BuiltOctree octree = buildInMemoryOctree(triangles, cell, level, octant, params);
+        const HierarchyParams& params,
+        const VoxelGrid* grid) {
+    BuiltHierarchy built = buildInMemoryHierarchy(triangles, cell, level, octant, params, grid);
     ChunkOutput out;
-    out.summary = std::move(octree.summary);
-    out.encoded = encodeLevels(std::move(octree.nodes), std::move(triangles));
+    out.summary = std::move(built.summary);
+    out.leafNodes = built.leafNodes;
+    out.encoded = encodeLevels(std::move(built.nodes), std::move(triangles));
     return out;
 }
 
@@ -132,12 +141,26 @@ Result<PrototypeBuildResult> PrototypeBuilder::build(
         RunFile& triangles,
         const glm::vec3& boundsMin,
         const glm::vec3& boundsMax,
+        const VoxelGrid* grid,
         std::uint64_t& spillBytes) {
     // The root cell is a cube around the bounds, a hair larger so no centroid sits on its max face.
     const glm::vec3 size = boundsMax - boundsMin;
     const float edge = std::max({size.x, size.y, size.z});
-    const float padded = edge * (1.0f + 1e-5f) + std::numeric_limits<float>::min();
-    const Cell root{boundsMin, padded};
+    float padded = edge * (1.0f + 1e-5f) + std::numeric_limits<float>::min();
+    Cell root{boundsMin, padded};
+    if (mParams.decomposition == Decomposition::Orsd) {
+        // ORSD's blocks are the grid's: the root is its smallest power-of-two block, so that the
+        // octree cells above the chunks are blocks too.
+        if (!grid)
+            return Status(ErrorCode::InvalidArgument,
+                          "prototype " + std::to_string(prototypeId) +
+                                  ": --decomposition orsd needs a voxel grid, which only the isosurface generator "
+                                  "declares; use octree, dbvd, phbvo or balanced for other inputs");
+        const GridBlock block = rootGridBlock(*grid);
+        padded = static_cast<float>(block.size) * grid->cellSize;
+        root = Cell{grid->origin, padded};
+    }
+    mGrid = mParams.decomposition == Decomposition::Orsd ? grid : nullptr;
 
     const std::uint64_t triangleCount = triangles.count(); // building consumes the run file
     Result<PrototypeBuildResult> result = triangleCount <= mChunkTriangles
@@ -153,12 +176,13 @@ Result<PrototypeBuildResult> PrototypeBuilder::build(
 Result<PrototypeBuildResult> PrototypeBuilder::buildInMemory(RunFile& triangles, const Cell& root) {
     FF_ASSIGN_OR_RETURN(std::vector<storage::PackedTriangle> all, triangles.readAll());
     triangles.remove();
-    BuiltOctree octree = buildInMemoryOctree(all, root, 0, 0, mParams);
-    const glm::vec3 boundsMin = octree.nodes[0].boundsMin;
-    const glm::vec3 boundsMax = octree.nodes[0].boundsMax;
+    BuiltHierarchy built = buildInMemoryHierarchy(all, root, 0, 0, mParams, mGrid);
+    const glm::vec3 boundsMin = built.nodes[0].boundsMin;
+    const glm::vec3 boundsMax = built.nodes[0].boundsMax;
     PrototypeBuildResult result;
-    result.nodes = octree.nodes.size();
-    EncodedSubtree encoded = encodeSubtree(std::move(octree.nodes), std::move(all), mWriter.pageSize());
+    result.nodes = built.nodes.size();
+    result.leafNodes = built.leafNodes;
+    EncodedSubtree encoded = encodeSubtree(std::move(built.nodes), std::move(all), mWriter.pageSize());
     result.geometryPages = encoded.geometryPageCount(mWriter.pageSize());
     result.nodePages = encoded.nodePages.size();
     FF_RETURN_IF_ERROR(commitSubtree(mWriter, encoded));
@@ -166,7 +190,7 @@ Result<PrototypeBuildResult> PrototypeBuilder::buildInMemory(RunFile& triangles,
     result.record.boundsMin = {boundsMin.x, boundsMin.y, boundsMin.z};
     result.record.boundsMax = {boundsMax.x, boundsMax.y, boundsMax.z};
     result.record.nodeCount = result.nodes;
-    result.summary = std::move(octree.summary);
+    result.summary = std::move(built.summary);
     result.maxDepth = encoded.maxLevel;
     result.chunks = 1;
     return result;
@@ -329,10 +353,10 @@ Result<PrototypeBuildResult> PrototypeBuilder::buildChunked(
             const int level = node.level;
             const int octant = node.octant;
             const HierarchyParams params = mParams;
-            running.push_back(std::async(std::launch::async, [file, cell, level, octant, params]() -> Result<ChunkOutput> {
+            running.push_back(std::async(std::launch::async, [file, cell, level, octant, params, grid = mGrid]() -> Result<ChunkOutput> {
                 FF_ASSIGN_OR_RETURN(std::vector<storage::PackedTriangle> chunkTriangles, file->readAll());
                 file->remove();
-                return buildChunk(std::move(chunkTriangles), cell, level, octant, params);
+                return buildChunk(std::move(chunkTriangles), cell, level, octant, params, grid);
             }));
         }
         for (std::size_t c = begin; c < end; ++c) {
@@ -341,6 +365,7 @@ Result<PrototypeBuildResult> PrototypeBuilder::buildChunked(
                 return chunk.status();
             FF_RETURN_IF_ERROR(levels.append(chunk->encoded));
             result.nodes += chunk->encoded.nodeCount + 1; // and its root
+            result.leafNodes += chunk->leafNodes;
             result.maxDepth = std::max(result.maxDepth, chunk->encoded.maxLevel);
             for (std::size_t l = 0; l < chunk->summary.cuts.size(); ++l) {
                 auto& cut = result.summary.cuts[l];

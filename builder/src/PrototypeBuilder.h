@@ -37,6 +37,7 @@ struct PrototypeBuildResult {
     storage::PrototypeRecord record{};
     PrototypeSummary summary;
     std::uint64_t nodes = 0;
+    std::uint64_t leafNodes = 0;
     std::uint32_t maxDepth = 0;
     std::uint64_t chunks = 0;
     std::uint64_t geometryPages = 0;
@@ -45,9 +46,11 @@ struct PrototypeBuildResult {
 
 /** Bytes of memory the builder plans per triangle of a chunk (triangle, nodes, records). */
 inline constexpr std::uint64_t kChunkBytesPerTriangle = 160;
+/** And what a bounding-volume decomposition adds: a SplitItem and an order index per triangle. */
+inline constexpr std::uint64_t kDecompositionBytesPerTriangle = 44;
 
 /**
- * Builds one prototype's octree from its run file and appends its pages to `writer`. A
+ * Builds one prototype's hierarchy from its run file and appends its pages to `writer`. A
  * prototype larger than one chunk (chunkTriangles) is partitioned out of core first, and its
  * chunks are laid out level by level across all of them (LevelRegions). Each chunk's root is
  * held back and written with the cells above the chunks.
@@ -67,13 +70,15 @@ public:
             std::filesystem::path tempDirectory,
             std::function<void(const BuildProgress&)> progress = {});
 
-    /** Builds and writes the prototype in `triangles` (consumed). Adds the bytes of the chunk
+    /** Builds and writes the prototype in `triangles` (consumed); `grid`: the voxel grid its
+     *  source declared, if any (ORSD needs one). Adds the bytes of the chunk
      *  files it writes to `spillBytes`; the run file itself is the caller's to count. */
     [[nodiscard]] Result<PrototypeBuildResult> build(
             std::uint32_t prototypeId,
             RunFile& triangles,
             const glm::vec3& boundsMin,
             const glm::vec3& boundsMax,
+            const VoxelGrid* grid,
             std::uint64_t& spillBytes);
 
 private:
@@ -89,6 +94,7 @@ private:
     unsigned mThreads;
     std::filesystem::path mTempDirectory;
     std::function<void(const BuildProgress&)> mProgress;
+    const VoxelGrid* mGrid = nullptr; ///< ORSD: the grid of the prototype being built
 
     void report(const char* phase, std::uint64_t done, std::uint64_t total) const {
         if (mProgress)

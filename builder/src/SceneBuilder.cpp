@@ -17,6 +17,7 @@
 #include <chrono>
 #include <cmath>
 #include <limits>
+#include <optional>
 #include <string>
 #include <thread>
 #include <stdlib.h> // mkdtemp
@@ -49,6 +50,7 @@ struct PrototypeState {
     RunFile run;
     glm::vec3 boundsMin{std::numeric_limits<float>::infinity()};
     glm::vec3 boundsMax{-std::numeric_limits<float>::infinity()};
+    std::optional<VoxelGrid> grid;
 };
 
 } // namespace
@@ -138,13 +140,14 @@ Result<std::unique_ptr<SceneBuilder>> SceneBuilder::create(
     impl->report.pageSize = writerOptions.pageSize;
     impl->report.pageSizeAuto = !options.pageSize.has_value();
     impl->report.threads = impl->options.threads;
+    impl->report.decomposition = std::string(decompositionName(options.hierarchy.decomposition));
     return std::unique_ptr<SceneBuilder>(new SceneBuilder(std::move(impl)));
 }
 
 Result<PrototypeId> SceneBuilder::addPrototype(std::string_view name) {
     const auto id = static_cast<PrototypeId>(mImpl->prototypes.size());
     auto state = std::make_unique<PrototypeState>(PrototypeState{
-            std::string(name), RunFile(mImpl->tempDirectory / ("proto" + std::to_string(id) + ".run")), {}, {}});
+            std::string(name), RunFile(mImpl->tempDirectory / ("proto" + std::to_string(id) + ".run")), {}, {}, std::nullopt});
     state->boundsMin = glm::vec3(std::numeric_limits<float>::infinity());
     state->boundsMax = glm::vec3(-std::numeric_limits<float>::infinity());
     mImpl->prototypes.push_back(std::move(state));
@@ -207,6 +210,19 @@ Status SceneBuilder::addInstance(PrototypeId prototype, const glm::dmat4& transf
     return Status::ok();
 }
 
+Status SceneBuilder::declareVoxelGrid(PrototypeId prototype, const VoxelGrid& grid) {
+    if (prototype >= mImpl->prototypes.size())
+        return Status(ErrorCode::InvalidArgument, "unknown prototype " + std::to_string(prototype));
+    const bool finite = std::isfinite(grid.origin.x) && std::isfinite(grid.origin.y) && std::isfinite(grid.origin.z);
+    if (!finite || !(grid.cellSize > 0.0f) || !std::isfinite(grid.cellSize) || grid.cells.x == 0 || grid.cells.y == 0 ||
+        grid.cells.z == 0 || std::max({grid.cells.x, grid.cells.y, grid.cells.z}) > (1u << 20))
+        return Status(ErrorCode::InvalidArgument,
+                      "prototype " + std::to_string(prototype) +
+                              ": a voxel grid needs a finite origin, a positive cell size and 1 to 2^20 cells an axis");
+    mImpl->prototypes[prototype]->grid = grid;
+    return Status::ok();
+}
+
 void SceneBuilder::setMetadataJson(std::string json) { mImpl->options.metadataJson = std::move(json); }
 
 Result<BuildReport> SceneBuilder::finish() {
@@ -232,7 +248,9 @@ Result<BuildReport> SceneBuilder::finish() {
     // ---- partition + buildHierarchy, one prototype at a time ---------------------------------
     const std::uint64_t fixedReserve = std::min<std::uint64_t>(s.options.memoryBudgetBytes / 4, 64ull << 20);
     const std::uint64_t chunkBudget = (s.options.memoryBudgetBytes - fixedReserve) / s.options.threads;
-    const std::uint64_t chunkTriangles = chunkBudget / kChunkBytesPerTriangle;
+    const std::uint64_t bytesPerTriangle = kChunkBytesPerTriangle +
+            (s.options.hierarchy.decomposition == Decomposition::Octree ? 0 : kDecompositionBytesPerTriangle);
+    const std::uint64_t chunkTriangles = chunkBudget / bytesPerTriangle;
     // Out of the fixed reserve: a chunked prototype gathers each octree level's triangles in an
     // extent of this size, budget/256 up to 1 MiB, before writing them (at most maxDepth + 1
     // levels: 21 MiB at 1 GiB).
@@ -259,13 +277,16 @@ Result<BuildReport> SceneBuilder::finish() {
         report.spillBytes += proto.run.bytesWritten();
         FF_ASSIGN_OR_RETURN(
                 PrototypeBuildResult built,
-                protoBuilder.build(static_cast<std::uint32_t>(p), proto.run, proto.boundsMin, proto.boundsMax, report.spillBytes));
+                protoBuilder.build(
+                        static_cast<std::uint32_t>(p), proto.run, proto.boundsMin, proto.boundsMax,
+                        proto.grid ? &*proto.grid : nullptr, report.spillBytes));
         storedIndex[p] = static_cast<std::uint32_t>(protoRecords.size());
         protoRecords.push_back(built.record);
         summaries.push_back(std::move(built.summary));
         names.push_back(proto.name);
         report.storedTriangles += built.record.triangleCount;
         report.nodes += built.nodes;
+        report.leafNodes += built.leafNodes;
         report.maxDepth = std::max(report.maxDepth, built.maxDepth);
         report.chunks += built.chunks;
         report.geometryPages += built.geometryPages;
@@ -398,7 +419,9 @@ std::string buildReportJson(const BuildReport& r) {
             {"prototypes", r.prototypes},
             {"empty_prototypes", r.emptyPrototypes},
             {"instances", r.instances},
+            {"decomposition", r.decomposition},
             {"nodes", r.nodes},
+            {"leaf_nodes", r.leafNodes},
             {"depth", r.maxDepth},
             {"instance_level_depth", r.instanceLevelDepth},
             {"chunks", r.chunks},

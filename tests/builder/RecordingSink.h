@@ -8,6 +8,7 @@
 #include <cstdint>
 #include <string>
 #include <string_view>
+#include <utility>
 #include <vector>
 
 namespace ff::builder::testing {
@@ -46,7 +47,15 @@ public:
         return Status::ok();
     }
 
+    Status declareVoxelGrid(PrototypeId prototype, const VoxelGrid& grid) override {
+        if (prototype >= mPrototypes.size())
+            return {ErrorCode::InvalidArgument, "unknown prototype"};
+        mVoxelGrids.emplace_back(prototype, grid);
+        return Status::ok();
+    }
+
     const std::vector<Prototype>& prototypes() const { return mPrototypes; }
+    const std::vector<std::pair<PrototypeId, VoxelGrid>>& voxelGrids() const { return mVoxelGrids; }
     const std::vector<Instance>& instances() const { return mInstances; }
     std::size_t largestBatch() const { return mLargestBatch; }
     std::size_t batches() const { return mBatches; }
@@ -68,6 +77,7 @@ public:
 private:
     std::vector<Prototype> mPrototypes;
     std::vector<Instance> mInstances;
+    std::vector<std::pair<PrototypeId, VoxelGrid>> mVoxelGrids;
     std::size_t mLargestBatch = 0;
     std::size_t mBatches = 0;
 };

@@ -1,10 +1,13 @@
 #include "CountingSink.h"
+#include "RecordingSink.h"
 
 #include <ff/builder/Generators.h>
+#include <ff/storage/VertexCodec.h>
 
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <map>
 #include <ostream>
@@ -102,7 +105,7 @@ TEST(GeneratorCatalogTest, ListsEveryGeneratorWithDocumentedParameters) {
             EXPECT_GT(colon, 0u) << info.name << "." << key;
         }
     }
-    EXPECT_EQ(names, (std::set<std::string>{"forest", "terrain", "molecule", "blinds", "sphere", "city", "cathedral"}));
+    EXPECT_EQ(names, (std::set<std::string>{"forest", "terrain", "molecule", "blinds", "sphere", "city", "cathedral", "isosurface"}));
 }
 
 TEST(GeneratorCatalogTest, CatalogDefaultsAreAccepted) {
@@ -112,9 +115,9 @@ TEST(GeneratorCatalogTest, CatalogDefaultsAreAccepted) {
         std::string spec = info.name + ":";
         for (const auto& [key, help] : info.params) {
             const std::string value = help.substr(0, help.find(": "));
-            const bool isSize = key == "triangles" || key == "spheres" || key == "trees";
-            spec += key + "=" + (isSize ? std::string(key == "triangles" ? "1000" : "4") : value) +
-                    ",";
+            const bool isSize = key == "triangles" || key == "spheres" || key == "trees" || key == "resolution";
+            const std::string small = key == "triangles" ? "1000" : (key == "resolution" ? "16" : "4");
+            spec += key + "=" + (isSize ? small : value) + ",";
         }
         spec.pop_back();
         CountingSink sink;
@@ -217,7 +220,8 @@ INSTANTIATE_TEST_SUITE_P(
                         "blinds:slabs=20,tilt=30", 0x05b6126a4f525d95ull, 0xd6e975053c6d83d5ull},
                 GoldenScene{"sphere:triangles=2000,radius=3", 0xe25d855477140997ull, 0xd6e975053c6d83d5ull},
                 GoldenScene{"city:blocks=3,floors=2,items=2,seed=7", 0xd2009451b99c759dull, 0xefcbbc213fa8a5a4ull},
-                GoldenScene{"cathedral:bays=3", 0x010e54938007ffd9ull, 0xd6e975053c6d83d5ull}),
+                GoldenScene{"cathedral:bays=3", 0x010e54938007ffd9ull, 0xd6e975053c6d83d5ull},
+                GoldenScene{"isosurface:resolution=24,seed=3", 0x81f0ae21111f4839ull, 0xd6e975053c6d83d5ull}),
         [](const ::testing::TestParamInfo<GoldenScene>& param) {
             const std::string spec = param.param.spec;
             return spec.substr(0, spec.find(':'));
@@ -575,6 +579,92 @@ TEST(CathedralGeneratorTest, DetailAndBaysScaleTheTriangles) {
     const GeneratorReport c = run("cathedral:bays=8", longer);
     EXPECT_GT(b.triangles, 3 * a.triangles); // most surfaces tessellate in two directions
     EXPECT_GT(c.triangles, a.triangles + a.triangles / 2);
+}
+
+TEST(IsosurfaceGeneratorTest, TheDefaultVolumeIsAtLeastTheVentriclesSize) {
+    CountingSink sink;
+    const GeneratorReport report = run("isosurface", sink);
+    EXPECT_GE(report.triangles, 270'000u) << "Meißner et al.'s ventricular system: 270 k triangles";
+    expectReportMatchesSink(report, sink);
+    EXPECT_EQ(sink.nonFiniteTriangles, 0u);
+    ASSERT_EQ(sink.prototypes.size(), 1u);
+    EXPECT_EQ(sink.instances.size(), 1u);
+}
+
+/** A generated volume, kept whole: its triangles and the grid it declared. */
+testing::RecordingSink recordIsosurface(const std::string& text) {
+    testing::RecordingSink sink;
+    Result<GeneratorReport> report = runGenerator(specOf(text), sink);
+    EXPECT_TRUE(report.isOk()) << report.status().toString();
+    return sink;
+}
+
+glm::vec3 positionOf(const storage::PackedVertex& v) { return {v.position[0], v.position[1], v.position[2]}; }
+
+TEST(IsosurfaceGeneratorTest, EveryTriangleLiesInOneCellOfTheDeclaredGrid) {
+    const testing::RecordingSink sink = recordIsosurface("isosurface:resolution=40");
+    ASSERT_EQ(sink.voxelGrids().size(), 1u);
+    const VoxelGrid& grid = sink.voxelGrids()[0].second;
+    EXPECT_EQ(grid.cells, glm::uvec3(40u));
+    const auto& triangles = sink.prototypes()[0].triangles;
+    ASSERT_GT(triangles.size(), 1000u);
+    for (const storage::PackedTriangle& t : triangles) {
+        const glm::vec3 centroid =
+                (positionOf(t.vertices[0]) + positionOf(t.vertices[1]) + positionOf(t.vertices[2])) / 3.0f;
+        const glm::vec3 cellMin = grid.origin + glm::floor((centroid - grid.origin) / grid.cellSize) * grid.cellSize;
+        const float slack = 1e-4f * grid.cellSize;
+        for (const storage::PackedVertex& v : t.vertices) {
+            const glm::vec3 p = positionOf(v);
+            ASSERT_TRUE(glm::all(glm::greaterThanEqual(p, cellMin - slack)) &&
+                        glm::all(glm::lessThanEqual(p, cellMin + grid.cellSize + slack)))
+                    << "a triangle leaves its grid cell";
+        }
+    }
+}
+
+TEST(IsosurfaceGeneratorTest, TheSurfaceIsClosedAndFacesOutward) {
+    const testing::RecordingSink sink = recordIsosurface("isosurface:resolution=48");
+    const auto& triangles = sink.prototypes()[0].triangles;
+    // Closed and consistently wound: every directed edge appears once, and its reverse once.
+    using Point = std::array<float, 3>;
+    std::map<std::pair<Point, Point>, int> edges;
+    std::size_t degenerate = 0;
+    double totalArea = 0.0;
+    double inwardArea = 0.0;
+    for (const storage::PackedTriangle& t : triangles) {
+        const std::array<Point, 3> p = {t.vertices[0].position, t.vertices[1].position, t.vertices[2].position};
+        if (p[0] == p[1] || p[1] == p[2] || p[2] == p[0]) {
+            ++degenerate; // zero area: dropped by the builder, and they close nothing
+            continue;
+        }
+        for (int e = 0; e < 3; ++e)
+            ++edges[{p[static_cast<std::size_t>(e)], p[static_cast<std::size_t>((e + 1) % 3)]}];
+        // The face normal agrees with the field's gradient (the shading normal): slivers may
+        // tilt past it, so this is by area.
+        const glm::vec3 a = positionOf(t.vertices[0]);
+        const glm::vec3 face = glm::cross(positionOf(t.vertices[1]) - a, positionOf(t.vertices[2]) - a);
+        const std::array<float, 3> n = storage::decodeOctNormal(t.vertices[0].normalOct);
+        const float area = glm::length(face);
+        totalArea += area;
+        inwardArea += glm::dot(face, glm::vec3(n[0], n[1], n[2])) > 0.0f ? 0.0 : area;
+    }
+    EXPECT_LT(inwardArea, 0.001 * totalArea) << "triangles facing inward";
+    EXPECT_LT(degenerate, triangles.size() / 100);
+    std::size_t open = 0;
+    for (const auto& [edge, count] : edges) {
+        const auto reverse = edges.find({edge.second, edge.first});
+        open += (count != 1 || reverse == edges.end() || reverse->second != 1) ? 1u : 0u;
+    }
+    EXPECT_EQ(open, 0u) << "edges not shared by exactly two triangles wound opposite ways";
+}
+
+TEST(IsosurfaceGeneratorTest, ResolutionScalesTheTrianglesAndSeedMovesTheBranches) {
+    CountingSink coarse, fine, reseeded;
+    const GeneratorReport a = run("isosurface:resolution=32", coarse);
+    const GeneratorReport b = run("isosurface:resolution=64", fine);
+    run("isosurface:resolution=32,seed=2", reseeded);
+    EXPECT_GT(b.triangles, 3 * a.triangles); // a surface: four times the cells it crosses
+    EXPECT_NE(coarse.triangleHash, reseeded.triangleHash);
 }
 
 } // namespace

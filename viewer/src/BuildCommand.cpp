@@ -34,6 +34,8 @@ struct BuildArgs {
     float cubeCost = 6.0f;
     float largeTriangleTolerance = 1.0f;
     int maxDepth = 20;
+    std::string decomposition = "octree";
+    builder::DecompositionParams split;
     std::string offset = "0,0,0";
     double scale = 1.0;
     std::string report;
@@ -76,6 +78,12 @@ int runBuild(const BuildArgs& args) {
     options.hierarchy.cubeCost = args.cubeCost;
     options.hierarchy.largeTriangleTolerance = args.largeTriangleTolerance;
     options.hierarchy.maxDepth = args.maxDepth;
+    const std::optional<builder::Decomposition> decomposition = builder::parseDecomposition(args.decomposition);
+    if (!decomposition)
+        return reportError(
+                "build", Status(ErrorCode::InvalidArgument, "--decomposition must be octree, dbvd, phbvo, balanced or orsd"));
+    options.hierarchy.decomposition = *decomposition;
+    options.hierarchy.split = args.split;
     auto offset = runtime::parseDVec3(args.offset);
     if (!offset)
         return reportError("build", offset.status().withContext("--offset"));
@@ -162,6 +170,29 @@ CommandRunner addBuildCommand(CLI::App& app) {
     cmd->add_option("--large-triangle-tolerance", args->largeTriangleTolerance,
                     "Triangles larger than this x their cell stay at the inner node")->capture_default_str();
     cmd->add_option("--max-depth", args->maxDepth, "Deepest octree level")->capture_default_str();
+    cmd->add_option("--decomposition", args->decomposition,
+                    "How the hierarchy splits (docs/methods.md §10): octree (cost rule), dbvd (cube-like slabs of "
+                    "the largest side), phbvo (binned-SAH bounding volumes), balanced (median planes), orsd "
+                    "(relevant cells of a voxel grid; the isosurface generator only)")
+            ->capture_default_str();
+    builder::DecompositionParams& split = args->split;
+    cmd->add_option("--min-triangles", split.minTriangles, "dbvd: an entity this small is a leaf")->capture_default_str();
+    cmd->add_option("--min-size", split.minSize, "dbvd: an entity whose largest side is this short is a leaf (0: none)")
+            ->capture_default_str();
+    cmd->add_option("--plane-shift", split.planeShift,
+                    "dbvd: how far a split plane may move to cut fewer triangles, share of a slab (0-0.45)")
+            ->capture_default_str();
+    cmd->add_option("--max-triangles", split.maxTriangles,
+                    "phbvo: Max_Triangles_Per_Entity; balanced: tri_max")->capture_default_str();
+    cmd->add_option("--tri-min", split.balancedMinTriangles, "balanced: fewest triangles a child gets")->capture_default_str();
+    cmd->add_option("--arity", split.arity, "phbvo: children per node, 2 (binary) or 4 (collapsed)")
+            ->check(CLI::IsMember({2u, 4u}))
+            ->capture_default_str();
+    cmd->add_option("--relevant-cells", split.relevantCells, "orsd: a block with more relevant cells splits")
+            ->capture_default_str();
+    cmd->add_option("--decomposition-depth", split.maxDepth, "dbvd/phbvo/balanced/orsd: Max_Decomposition_Depth")
+            ->check(CLI::Range(1, 64))
+            ->capture_default_str();
     cmd->add_option("--offset", args->offset, "Moves the input by x,y,z in the world (after --scale)")->capture_default_str();
     cmd->add_option("--scale", args->scale, "Scales the input about the world origin")->capture_default_str();
     cmd->add_option("--report", args->report, "Write the JSON build report here");

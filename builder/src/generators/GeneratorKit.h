@@ -214,5 +214,6 @@ GeneratorEntry blindsGenerator();
 GeneratorEntry sphereGenerator();
 GeneratorEntry cityGenerator();
 GeneratorEntry cathedralGenerator();
+GeneratorEntry isosurfaceGenerator();
 
 } // namespace ff::builder::generators

@@ -49,6 +49,8 @@ struct GeneratorReport {
  *  - sphere:triangles=N,radius — one large smooth closed surface (latitude-longitude grid)
  *  - city:blocks=N,floors,items,instanced — closed furnished buildings along streets (occlusion)
  *  - cathedral:bays=N,detail — a basilica seen from inside (low occlusion)
+ *  - isosurface:resolution=N,seed — chambers and tubes extracted from a voxel grid (declares
+ *    the grid to the sink: ORSD)
  */
 [[nodiscard]] Result<GeneratorReport> runGenerator(const GeneratorSpec& spec, ISceneSink& sink);
 

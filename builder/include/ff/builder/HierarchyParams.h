@@ -1,9 +1,49 @@
 #pragma once
 
+#include <optional>
+#include <string_view>
+
 namespace ff::builder {
+
+/** How a hierarchy splits its triangles (Meißner, Bartz et al. 1999, §3; docs/methods.md §10). */
+enum class Decomposition {
+    Octree,   ///< adaptive octree with Chamberlain's cost rule (the default)
+    Dbvd,     ///< dimension-oriented bounding volumes: the largest side cut into cube-like slabs
+    Phbvo,    ///< binned-SAH bounding volume hierarchy over triangle barycentres, 2- or 4-ary
+    Balanced, ///< SGI-opoptimize-like: up to eight children at the load-balancing median planes
+    Orsd,     ///< octree over a voxel grid's relevant-cell load (isosurfaces only)
+};
+
+/** "octree", "dbvd", "phbvo", "balanced", "orsd". */
+std::string_view decompositionName(Decomposition decomposition) noexcept;
+std::optional<Decomposition> parseDecomposition(std::string_view name) noexcept;
+
+/** The parameters of the non-octree decompositions; each names the paper's parameter it is. */
+struct DecompositionParams {
+    /** D-BVD: an entity with this many triangles or fewer is a leaf (the paper's "minimal
+     *  number of polygons"). */
+    unsigned minTriangles = 512;
+    /** D-BVD: an entity whose largest side is this short or shorter is a leaf (0 = no limit). */
+    float minSize = 0.0f;
+    /** D-BVD: how far a split plane may move to cut fewer triangles, as a share of a slab. */
+    float planeShift = 0.25f;
+    /** p-HBVO's Max_Triangles_Per_Entity and balanced's tri_max: larger entities split. */
+    unsigned maxTriangles = 512;
+    /** balanced's tri_min: no child gets fewer (it splits fewer ways instead). */
+    unsigned balancedMinTriangles = 64;
+    /** p-HBVO: children per inner node, 2 (the paper's binary tree) or 4 (its collapsed
+     *  quad tree, +20 % fps in the paper). */
+    unsigned arity = 4;
+    /** ORSD: a block whose relevant-cell load exceeds this splits into its eight octants. */
+    unsigned relevantCells = 256;
+    /** Max_Decomposition_Depth of every decomposition (levels below the root it starts at). */
+    int maxDepth = 40;
+};
 
 /** How the builder subdivides and bakes. The defaults are the ones the benchmarks chose. */
 struct HierarchyParams {
+    Decomposition decomposition = Decomposition::Octree;
+    DecompositionParams split;
     /** Triangles a drawn color cube costs (three visible quads = six triangles). Chamberlain §4:
      *  a cell stops subdividing when its triangles cost no more than its children's cubes. */
     float cubeCost = 6.0f;
@@ -16,7 +56,8 @@ struct HierarchyParams {
     int bakeResolution = 8;
     /** Bake inner nodes directly from all their triangles instead of compositing children
      *  (Chamberlain §4's alternative). Slower; applies within memory-sized chunks, above them
-     *  the builder composites. */
+     *  the builder composites. The bounding-volume decompositions composite their children's
+     *  boxes seen through their cubes (their children are not octants: no quadrants). */
     bool bakeInnerDirect = false;
 };
 

@@ -78,7 +78,9 @@ struct BuildReport {
     std::uint32_t emptyPrototypes = 0;     ///< no triangle survived; their instances are dropped
     std::uint64_t instances = 0;
     std::uint64_t nodes = 0;
-    std::uint32_t maxDepth = 0;            ///< deepest prototype octree level
+    std::uint64_t leafNodes = 0;           ///< prototype nodes without children (geometry nodes)
+    std::string decomposition;             ///< HierarchyParams::decomposition's name
+    std::uint32_t maxDepth = 0;            ///< deepest prototype level
     std::uint32_t instanceLevelDepth = 0;
     std::uint64_t chunks = 0;
     std::uint64_t nodePages = 0;
@@ -119,6 +121,9 @@ public:
     [[nodiscard]] Status addTriangles(
             PrototypeId prototype, std::span<const storage::PackedTriangle> triangles) override;
     [[nodiscard]] Status addInstance(PrototypeId prototype, const glm::dmat4& transform) override;
+    /** Kept for ORSD (HierarchyParams::decomposition); errors: InvalidArgument for an unknown
+     *  prototype or a grid that is empty or not finite. */
+    [[nodiscard]] Status declareVoxelGrid(PrototypeId prototype, const VoxelGrid& grid) override;
 
     /** Replaces BuildOptions::metadataJson (sources learn their cameras only while feeding). */
     void setMetadataJson(std::string json);

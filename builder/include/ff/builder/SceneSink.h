@@ -27,6 +27,15 @@ struct SourceVertex {
     bool unlit = false; ///< KHR_materials_unlit: stored with storage::kUnlitNormalOct
 };
 
+/** The regular grid an isosurface was extracted from: cells[a] cubes of edge cellSize along
+ *  axis a from origin, each holding the triangles extracted in it (no triangle crosses a cell
+ *  face). ORSD decomposes by it (HierarchyParams.h). */
+struct VoxelGrid {
+    glm::vec3 origin{0.0f};
+    float cellSize = 1.0f;
+    glm::uvec3 cells{0u};
+};
+
 /** Packs one vertex; a zero or non-finite normal is replaced by `fallbackNormal`. */
 storage::PackedVertex packVertex(const SourceVertex& v, const glm::vec3& fallbackNormal) noexcept;
 
@@ -54,6 +63,14 @@ public:
     /** Places the prototype in the world with `transform` (affine, column-major glm; double, so
      *  scenes far from the world origin keep their precision until the builder picks the file frame). */
     [[nodiscard]] virtual Status addInstance(PrototypeId prototype, const glm::dmat4& transform) = 0;
+
+    /** Says that the prototype's triangles were extracted cell by cell from `grid` (in the
+     *  prototype's frame). Optional: sinks that have no use for it ignore it. */
+    [[nodiscard]] virtual Status declareVoxelGrid(PrototypeId prototype, const VoxelGrid& grid) {
+        (void)prototype;
+        (void)grid;
+        return Status::ok();
+    }
 };
 
 } // namespace ff::builder
