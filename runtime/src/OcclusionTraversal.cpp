@@ -23,6 +23,11 @@ namespace {
 using detail::Fetch;
 using detail::toVec3;
 
+double boxArea(const glm::vec3& lo, const glm::vec3& hi) {
+    const glm::dvec3 d = glm::max(glm::dvec3(hi - lo), glm::dvec3(0.0));
+    return 2.0 * (d.x * d.y + d.y * d.z + d.z * d.x);
+}
+
 constexpr std::uint32_t kNone = std::numeric_limits<std::uint32_t>::max();
 /** History entries not seen for this many frames are dropped. */
 constexpr std::uint32_t kHistoryFrames = 64;
@@ -818,7 +823,20 @@ std::uint64_t OcclusionTraversal::Impl::estimatedTriangles(const Entry& entry) c
     // What lies below a node of a prototype's hierarchy, as if its triangles were a surface
     // split evenly four ways a level (a volume splits eight ways: this errs towards testing).
     const unsigned shift = std::min(2u * entry.record.level, 62u);
-    return prototype->triangleCount >> shift;
+    const std::uint64_t byLevel = prototype->triangleCount >> shift;
+    const glm::vec3 cell = toVec3(entry.record.cellMax) - toVec3(entry.record.cellMin);
+    const float edge = std::max({cell.x, cell.y, cell.z});
+    if (std::min({cell.x, cell.y, cell.z}) >= edge * (1.0f - 1e-4f))
+        return byLevel; // a cubic cell: an octree's (the octree decompositions)
+    // A bounding box (D-BVD, p-HBVO, balanced): its levels split two to 33 ways, so the level
+    // says little. Its own triangles, or its share of the surface by its box's area, whichever
+    // is more: both err towards testing.
+    const double whole = boxArea(toVec3(prototype->boundsMin), toVec3(prototype->boundsMax));
+    const double share =
+            whole > 0.0 ? std::min(1.0, boxArea(toVec3(entry.record.boundsMin), toVec3(entry.record.boundsMax)) / whole)
+                        : 1.0;
+    const auto byArea = static_cast<std::uint64_t>(share * static_cast<double>(prototype->triangleCount));
+    return std::max({byLevel, byArea, static_cast<std::uint64_t>(entry.record.geometryCount)});
 }
 
 bool OcclusionTraversal::Impl::worthTesting(const Entry& entry) const {
