@@ -65,13 +65,46 @@ Result<std::unique_ptr<runtime::StreamingSession>> openSession(const PathParams&
     return runtime::StreamingSession::open(scenePath, options);
 }
 
+/** One build of the scene: the methods that name the same decomposition share it. */
+struct BuiltScene {
+    std::string decomposition; ///< empty: the scenario's build flags alone
+    std::filesystem::path path;
+    std::uint64_t nodes = 0;     ///< the build report's, every node of the file
+    std::uint64_t leafNodes = 0; ///< prototype nodes without children
+};
+
+/** Builds the scene once per decomposition the methods name, in their order. */
+Result<std::vector<BuiltScene>> buildScenes(
+        const PathParams& p, const Scenario& scenario, const BenchOptions& options, const std::filesystem::path& work) {
+    std::vector<BuiltScene> scenes;
+    for (const MethodSpec& method : p.methods) {
+        if (std::any_of(scenes.begin(), scenes.end(), [&](const BuiltScene& b) { return b.decomposition == method.decomposition; }))
+            continue;
+        BuiltScene built;
+        built.decomposition = method.decomposition;
+        const std::string suffix = built.decomposition.empty() ? "" : "-" + built.decomposition;
+        built.path = work / (scenario.name + suffix + ".ffs");
+        const std::filesystem::path report = work / (scenario.name + suffix + "-build.json");
+        std::vector<std::string> flags = {"--report", report.string()};
+        if (!built.decomposition.empty())
+            flags.insert(flags.end(), {"--decomposition", built.decomposition});
+        std::fprintf(stderr, "%s: building the scene%s\n", scenario.name.c_str(),
+                     built.decomposition.empty() ? "" : (" (" + built.decomposition + ")").c_str());
+        FF_RETURN_IF_ERROR(buildScene(p.scene, flags, built.path, options.selfExe).status().withContext(scenario.where()));
+        FF_ASSIGN_OR_RETURN(const nlohmann::json json, readJsonObject(report, "build report"));
+        built.nodes = json.value("nodes", std::uint64_t{0});
+        built.leafNodes = json.value("leaf_nodes", std::uint64_t{0});
+        scenes.push_back(std::move(built));
+    }
+    return scenes;
+}
+
 Status runPath(const PathParams& p, const Scenario& scenario, const BenchOptions& options) {
     ScenarioRun scenarioRun(scenario, options);
     const std::filesystem::path& work = scenarioRun.work();
-    const std::filesystem::path scenePath = work / (scenario.name + ".ffs");
-    std::fprintf(stderr, "%s: building the scene\n", scenario.name.c_str());
-    FF_RETURN_IF_ERROR(
-            buildScene(p.scene, {}, scenePath, options.selfExe).status().withContext(scenario.where()));
+    FF_ASSIGN_OR_RETURN(const std::vector<BuiltScene> scenes, buildScenes(p, scenario, options, work));
+    // Every build holds the same triangles: the reference (all geometry) is drawn from the first.
+    const std::filesystem::path& scenePath = scenes.front().path;
     FF_ASSIGN_OR_RETURN(auto context, runtime::OffscreenContext::create());
     // The reference of every frame: all geometry, every page mapped.
     FF_ASSIGN_OR_RETURN(auto referenceSession, runtime::StreamingSession::open(scenePath));
@@ -130,6 +163,10 @@ Status runPath(const PathParams& p, const Scenario& scenario, const BenchOptions
              "p99_ms",
              "debt_frames",
              "bytes_read",
+             // Decompositions (issue 15): the build each method drew, and its node counts.
+             "decomposition",
+             "scene_nodes",
+             "leaf_nodes",
              // Occlusion culling (issue 15): Meißner et al.'s Table 1 per method, means over the path.
              "occlusion",
              "coherence",
@@ -141,10 +178,14 @@ Status runPath(const PathParams& p, const Scenario& scenario, const BenchOptions
              "mean_render_rate",
              "mean_queries",
              "mean_queries_waited",
-             "mean_nodes_occluded"});
+             "mean_nodes_occluded",
+             "fps"});
     for (const MethodSpec& method : p.methods) {
         std::fprintf(stderr, "%s: method %s\n", scenario.name.c_str(), method.label.c_str());
-        FF_ASSIGN_OR_RETURN(std::unique_ptr<runtime::StreamingSession> session, openSession(p, scenePath));
+        const BuiltScene& built = *std::find_if(scenes.begin(), scenes.end(), [&](const BuiltScene& b) {
+            return b.decomposition == method.decomposition;
+        });
+        FF_ASSIGN_OR_RETURN(std::unique_ptr<runtime::StreamingSession> session, openSession(p, built.path));
         runtime::TemporalInstabilityAccumulator accumulator;
         std::vector<double> instability, psnr, frameMs;
         struct Means {
@@ -225,6 +266,9 @@ Status runPath(const PathParams& p, const Scenario& scenario, const BenchOptions
                  formatNumber(runtime::percentile(frameMs, 0.99), 3),
                  std::to_string(debtFrames),
                  std::to_string(session->totals().bytesRead),
+                 built.decomposition.empty() ? "as built" : built.decomposition,
+                 std::to_string(built.nodes),
+                 std::to_string(built.leafNodes),
                  method.oracle ? "oracle" : method.occlusion.enabled ? "on" : "off",
                  method.occlusion.coherent ? "on" : "off",
                  formatNumber(mean(frameMs), 3),
@@ -235,7 +279,8 @@ Status runPath(const PathParams& p, const Scenario& scenario, const BenchOptions
                  formatNumber(sums.renderRate / n, 4),
                  formatNumber(sums.queries / n, 1),
                  formatNumber(sums.waited / n, 1),
-                 formatNumber(sums.occluded / n, 1)});
+                 formatNumber(sums.occluded / n, 1),
+                 formatNumber(1000.0 / std::max(mean(frameMs), 1e-9), 2)});
     }
 
     const std::filesystem::path csv = options.outDir / (scenario.name + ".csv");
@@ -246,6 +291,7 @@ Status runPath(const PathParams& p, const Scenario& scenario, const BenchOptions
        << "Scene: "
        << (p.scene.gltf.empty() ? "`--generate " + p.scene.generate + "`"
                                 : "`" + p.scene.gltf + "`")
+       << (scenes.size() > 1 ? ", built once per decomposition the methods name" : "")
        << ". Path: `farfield path " << p.path.generator << "`, " << frames << " frames at " << width
        << "x" << height << ". Pages: "
        << (p.cache.cacheMb == 0

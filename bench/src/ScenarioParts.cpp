@@ -186,6 +186,7 @@ std::vector<MethodSpec> readMethods(ScenarioReader& reader) {
             if (const nlohmann::json* value = m.raw(key))
                 if (Status status = setMethodKey(method, key, *value); !status)
                     m.fail("", status.message());
+        method.decomposition = m.choice("decomposition", "", {"", "octree", "dbvd", "phbvo", "balanced", "orsd"});
         method.label = m.string(
                 "label",
                 kind == "full" ? "full" : "eps" + sweepValueText(method.selection.epsilonPixels));

@@ -70,6 +70,9 @@ struct MethodSpec {
     runtime::OcclusionOptions occlusion;
     /** Drawn by the occlusion oracle (StreamingSession::renderOracle): every page mapped. */
     bool oracle = false;
+    /** Path scenarios: the scene built with `--decomposition` this (empty: as the scenario's
+     *  "build" flags say); methods with the same one share a build. */
+    std::string decomposition;
 
     bool isFull() const noexcept { return selection.method == runtime::Method::Full; }
     /** "full" / "hierarchical" */
