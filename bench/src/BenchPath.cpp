@@ -170,6 +170,7 @@ Status runPath(const PathParams& p, const Scenario& scenario, const BenchOptions
              // Occlusion culling (issue 15): Meißner et al.'s Table 1 per method, means over the path.
              "occlusion",
              "coherence",
+             "backend",
              "mean_ms",
              "mean_select_ms",
              "mean_occlusion_ms",
@@ -271,6 +272,7 @@ Status runPath(const PathParams& p, const Scenario& scenario, const BenchOptions
                  std::to_string(built.leafNodes),
                  method.oracle ? "oracle" : method.occlusion.enabled ? "on" : "off",
                  method.occlusion.coherent ? "on" : "off",
+                 runtime::occlusionBackendName(method.occlusion.backend),
                  formatNumber(mean(frameMs), 3),
                  formatNumber(sums.select / n, 3),
                  formatNumber(sums.occlusion / n, 3),

@@ -161,11 +161,20 @@ Status setMethodKey(MethodSpec& method, const std::string& key, const nlohmann::
         flag = value.get<bool>();
         return Status::ok();
     }
+    if (key == "occlusion_backend") {
+        const std::optional<runtime::OcclusionBackend> backend =
+                value.is_string() ? runtime::parseOcclusionBackend(value.get<std::string>()) : std::nullopt;
+        if (!backend)
+            return Status(ErrorCode::InvalidArgument,
+                          "occlusion_backend: expected \"queries\" or \"hzb\", got " + value.dump());
+        method.occlusion.backend = *backend;
+        return Status::ok();
+    }
     return Status(
             ErrorCode::InvalidArgument,
             "\"" + key +
                     "\" is not a method key a sweep can vary (eps, cube_draw, cube_anisotropy, occlusion, "
-                    "coherence, oracle)");
+                    "coherence, oracle, occlusion_backend)");
 }
 
 std::vector<MethodSpec> readMethods(ScenarioReader& reader) {

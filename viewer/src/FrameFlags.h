@@ -22,7 +22,7 @@ CLI::Option* addGpuBudgetOption(CLI::App& cmd, std::string& gpuBudget);
 CLI::Option* addGpuUploadsOption(CLI::App& cmd, std::uint32_t& uploads);
 CLI::Option* addBackgroundOption(CLI::App& cmd, std::string& background);
 
-/** --occlusion off|on and --occlusion-queries N, straight into the frame's options; with
+/** --occlusion off|on, --occlusion-backend queries|hzb and --occlusion-queries N, straight into the frame's options; with
  *  `oracle`, --occlusion oracle too (StreamingSession::renderOracle, for benchmarks). */
 void addOcclusionOptions(CLI::App& cmd, runtime::OcclusionOptions& occlusion, bool* oracle = nullptr);
 

@@ -5,6 +5,8 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <optional>
+#include <string_view>
 
 namespace ff::runtime {
 
@@ -25,8 +27,19 @@ struct FrameBudgets {
  * Occlusion culling (OcclusionTraversal): a front-to-back walk that tests node boxes against
  * what is already drawn before drawing their subtrees, with CHC++'s temporal coherence.
  */
+/** How occlusion tests are answered (docs/methods.md §9). */
+enum class OcclusionBackend {
+    Queries, ///< hardware occlusion queries, answered late (CHC++)
+    Hzb,     ///< a max-depth pyramid of the depth read back, tested on the CPU, answered at once
+};
+
+/** "queries" / "hzb", and back. */
+const char* occlusionBackendName(OcclusionBackend backend) noexcept;
+std::optional<OcclusionBackend> parseOcclusionBackend(std::string_view name) noexcept;
+
 struct OcclusionOptions {
     bool enabled = false;
+    OcclusionBackend backend = OcclusionBackend::Queries;
     /** CHC++'s temporal coherence. Off: no history, every node is tested before it is drawn,
      *  every frame (what coherence saves is measured against this). */
     bool coherent = true;

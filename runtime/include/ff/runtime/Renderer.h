@@ -66,7 +66,9 @@ public:
     /** Admits a geometry page for this frame (see the class comment). */
     [[nodiscard]] bool admit(std::uint64_t geometryPage) override;
 
-    // IOcclusionTester: GL_ANY_SAMPLES_PASSED_CONSERVATIVE queries, pooled; submit() flushes.
+    // IOcclusionTester, by FrameContext::occlusion.backend: GL_ANY_SAMPLES_PASSED_CONSERVATIVE
+    // queries, pooled, submit() flushes; or (hzb) a depth pyramid of the depth read back when
+    // geometry was drawn since the last read, answered at once.
     [[nodiscard]] QueryTicket issue(std::span<const OcclusionBox> group) override;
     void submit() override;
     [[nodiscard]] bool ready(QueryTicket ticket) override;

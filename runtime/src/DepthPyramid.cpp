@@ -1,0 +1,107 @@
+#include "DepthPyramid.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+namespace ff::runtime {
+
+namespace {
+
+/** Depth readback is quantised (24-bit): a box face lying on a drawn surface must not be found
+ *  behind it by a rounding. */
+constexpr float kDepthSlack = 1.0f / (1 << 22);
+
+} // namespace
+
+void DepthPyramid::build(int width, int height, std::span<const float> depth) {
+    mLevels.clear();
+    mWidths.clear();
+    mHeights.clear();
+    if (width <= 0 || height <= 0)
+        return;
+    mLevels.emplace_back(
+            depth.begin(), depth.begin() + static_cast<std::ptrdiff_t>(width) * height);
+    mWidths.push_back(width);
+    mHeights.push_back(height);
+    while (mWidths.back() > 1 || mHeights.back() > 1) {
+        const int w = mWidths.back();
+        const int h = mHeights.back();
+        const int cw = (w + 1) / 2;
+        const int ch = (h + 1) / 2;
+        const std::vector<float>& below = mLevels.back();
+        std::vector<float> level(static_cast<std::size_t>(cw) * static_cast<std::size_t>(ch));
+        for (int y = 0; y < ch; ++y)
+            for (int x = 0; x < cw; ++x) {
+                float farthest = 0.0f;
+                for (int dy = 0; dy < 2; ++dy)
+                    for (int dx = 0; dx < 2; ++dx) {
+                        const int sx = std::min(2 * x + dx, w - 1);
+                        const int sy = std::min(2 * y + dy, h - 1);
+                        farthest = std::max(
+                                farthest,
+                                below[static_cast<std::size_t>(sy) * static_cast<std::size_t>(w) +
+                                      static_cast<std::size_t>(sx)]);
+                    }
+                level[static_cast<std::size_t>(y) * static_cast<std::size_t>(cw) +
+                      static_cast<std::size_t>(x)] = farthest;
+            }
+        mLevels.push_back(std::move(level));
+        mWidths.push_back(cw);
+        mHeights.push_back(ch);
+    }
+}
+
+bool DepthPyramid::mayPass(int x0, int y0, int x1, int y1, float nearest) const {
+    if (mLevels.empty())
+        return true;
+    x0 = std::clamp(x0, 0, width() - 1);
+    x1 = std::clamp(x1, 0, width() - 1);
+    y0 = std::clamp(y0, 0, height() - 1);
+    y1 = std::clamp(y1, 0, height() - 1);
+    int level = 0;
+    while (level + 1 < levels() && ((x1 >> level) - (x0 >> level) >= kTexelsPerSide ||
+                                    (y1 >> level) - (y0 >> level) >= kTexelsPerSide))
+        ++level;
+    // Texel t of level l covers the pixels [t * 2^l, (t + 1) * 2^l): the rectangle's texels.
+    for (int y = y0 >> level; y <= y1 >> level; ++y)
+        for (int x = x0 >> level; x <= x1 >> level; ++x)
+            if (nearest <= at(level, x, y) + kDepthSlack)
+                return true;
+    return false;
+}
+
+bool boxMayBeVisible(
+        const DepthPyramid& pyramid,
+        const OcclusionBox& box,
+        const glm::mat4& viewProjection,
+        int width,
+        int height) {
+    glm::vec2 lo(std::numeric_limits<float>::infinity());
+    glm::vec2 hi(-std::numeric_limits<float>::infinity());
+    float nearest = std::numeric_limits<float>::infinity();
+    for (const glm::vec3& corner : box.corners) {
+        const glm::vec4 clip = viewProjection * glm::vec4(corner, 1.0f);
+        if (!(clip.w > 0.0f) || clip.z < -clip.w)
+            return true; // behind the near plane
+        const glm::vec3 ndc = glm::vec3(clip) / clip.w;
+        const glm::vec2 window(
+                (ndc.x * 0.5f + 0.5f) * static_cast<float>(width),
+                (ndc.y * 0.5f + 0.5f) * static_cast<float>(height));
+        lo = glm::min(lo, window);
+        hi = glm::max(hi, window);
+        nearest = std::min(nearest, ndc.z * 0.5f + 0.5f);
+    }
+    if (hi.x < 0.0f || hi.y < 0.0f || lo.x >= static_cast<float>(width) ||
+        lo.y >= static_cast<float>(height))
+        return true; // off screen: the frustum's business, not depth's
+    // Every pixel whose centre the box may cover, and one more each side for rounding.
+    return pyramid.mayPass(
+            static_cast<int>(std::floor(lo.x)) - 1,
+            static_cast<int>(std::floor(lo.y)) - 1,
+            static_cast<int>(std::floor(hi.x)) + 1,
+            static_cast<int>(std::floor(hi.y)) + 1,
+            nearest);
+}
+
+} // namespace ff::runtime
