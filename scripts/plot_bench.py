@@ -101,11 +101,14 @@ def forest(data, out, name):
             ax.plot(tri[last:], full[last:], "s--", color=color_full, alpha=0.6,
                     label=f"full {label}, extrapolated from per-triangle cost")
         ax.plot(tri, hier, "o-", color=color_hier, label=f"hierarchical {label} (epsilon = 1)")
+        if sel and sel[0].get("occlusion_ms"):
+            ax.plot(tri, [float(r["occlusion_ms"]) for r in sel], "^-", color=f"C{2 * i + 6}",
+                    label=f"hierarchical + occlusion culling {label}")
     ax.set_xscale("log")
     ax.set_yscale("log")
     ax.set_xlabel("triangles in the scene (log)")
     ax.set_ylabel("frame time (ms, log)")
-    ax.set_title("forest of 1 .. %s trees, fixed view" % data[-1]["trees"])
+    ax.set_title("forest of %s .. %s trees, fixed view" % (data[0]["trees"], data[-1]["trees"]))
     ax.grid(True, which="both", alpha=0.3)
     ax.legend(fontsize=7)
     fig.tight_layout()

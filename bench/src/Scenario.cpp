@@ -231,6 +231,17 @@ double ScenarioReader::number(const char* key, double fallback) {
     return value->get<double>();
 }
 
+bool ScenarioReader::boolean(const char* key, bool fallback) {
+    const nlohmann::json* value = lookUp(key);
+    if (!value)
+        return fallback;
+    if (!value->is_boolean()) {
+        fail(key, "expected true or false, got " + shown(*value));
+        return fallback;
+    }
+    return value->get<bool>();
+}
+
 std::int64_t ScenarioReader::integer(const char* key, std::int64_t fallback) {
     const nlohmann::json* value = lookUp(key);
     if (!value)

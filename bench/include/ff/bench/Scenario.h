@@ -81,6 +81,7 @@ public:
 
     bool has(const char* key);
     double number(const char* key, double fallback);
+    bool boolean(const char* key, bool fallback);
     std::int64_t integer(const char* key, std::int64_t fallback);
     std::string string(const char* key, std::string fallback);
     /** A string that must be one of `choices`. */
