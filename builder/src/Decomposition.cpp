@@ -2,6 +2,8 @@
 
 #include "Decomposition.h"
 
+#include "Morton.h"
+
 #include <ff/storage/Assert.h>
 
 #include <algorithm>
@@ -49,21 +51,6 @@ void padFlat(glm::vec3& lo, glm::vec3& hi) {
             lo[a] -= 0.5f * least;
             hi[a] += 0.5f * least;
         }
-}
-
-std::uint64_t spread21(std::uint64_t v) {
-    // Bit i of a 21-bit value to bit 3i: the masks keep only the copies that belong.
-    v &= 0x1FFFFFull;
-    v = (v | (v << 32)) & 0x1F00000000FFFFull;
-    v = (v | (v << 16)) & 0x1F0000FF0000FFull;
-    v = (v | (v << 8)) & 0x100F00F00F00F00Full;
-    v = (v | (v << 4)) & 0x10C30C30C30C30C3ull;
-    v = (v | (v << 2)) & 0x1249249249249249ull;
-    return v;
-}
-
-std::uint64_t morton(const glm::uvec3& cell) {
-    return spread21(cell.x) | (spread21(cell.y) << 1) | (spread21(cell.z) << 2);
 }
 
 /** Children of one split: consecutive ranges of `order`; `leaf` ones are not split again. */
@@ -183,19 +170,8 @@ private:
         return size.x >= size.y && size.x >= size.z ? 0 : (size.y >= size.z ? 1 : 2);
     }
 
-    /** Halves [begin, end) at the median barycentre along `axis` (ties by item index): the
-     *  split of last resort, when no plane separates the items (identical ones, say). */
-    void sortAlong(std::uint64_t begin, std::uint64_t end, int axis) {
-        std::sort(
-                mOrder.begin() + static_cast<std::ptrdiff_t>(begin),
-                mOrder.begin() + static_cast<std::ptrdiff_t>(end),
-                [&](std::uint32_t a, std::uint32_t b) {
-                    const float ca = mItems[a].centre[axis];
-                    const float cb = mItems[b].centre[axis];
-                    return ca < cb || (ca == cb && a < b);
-                });
-    }
-
+    /** Cuts [begin, end) at the median barycentre along `axis` (ties by item index): the split
+     *  of last resort, when no plane separates the items (identical ones, say). */
     std::uint64_t medianCut(std::uint64_t begin, std::uint64_t end, int axis) {
         const std::uint64_t middle = begin + (end - begin) / 2;
         std::nth_element(
@@ -455,7 +431,7 @@ private:
                 cell[a] = static_cast<std::uint32_t>(std::clamp(
                         c, static_cast<float>(block.first[a]), static_cast<float>(last[a])));
             }
-            mCellKeys[i] = morton(cell);
+            mCellKeys[i] = mortonKey(cell);
         }
         std::sort(mOrder.begin(), mOrder.end(), [&](std::uint32_t a, std::uint32_t b) {
             return mCellKeys[a] < mCellKeys[b] || (mCellKeys[a] == mCellKeys[b] && a < b);
@@ -475,7 +451,7 @@ private:
             return {};
         const std::uint32_t half = block.size / 2;
         const std::uint64_t childKeys = static_cast<std::uint64_t>(half) * half * half;
-        const std::uint64_t base = morton(block.first);
+        const std::uint64_t base = mortonKey(block.first);
         Split split;
         split.octreeChildren = true;
         std::uint64_t cursor = begin;

@@ -3,6 +3,7 @@
 #include "Decomposition.h"
 #include "HierarchyBuild.h"
 #include "LevelRegions.h"
+#include "Morton.h"
 #include "SubtreeEncoder.h"
 
 #include <ff/storage/Assert.h>
@@ -37,18 +38,6 @@ struct TopNode {
 };
 
 constexpr int kMaxCountLevel = 16;
-
-std::uint64_t spreadBits(std::uint64_t v) {
-    // Interleave 16 bits with two zero bits between each: the classic 21-bit magic numbers
-    // (bit i lands at bit 3i). Each mask keeps only the copies that belong where they landed.
-    v &= 0xFFFF;
-    v = (v | (v << 32)) & 0x001F00000000FFFFull;
-    v = (v | (v << 16)) & 0x001F0000FF0000FFull;
-    v = (v | (v << 8)) & 0x100F00F00F00F00Full;
-    v = (v | (v << 4)) & 0x10C30C30C30C30C3ull;
-    v = (v | (v << 2)) & 0x1249249249249249ull;
-    return v;
-}
 
 /** Morton key of the level-`level` cell containing `p` (bit order per level: x, y, z). */
 std::uint64_t cellKey(const Cell& root, const glm::vec3& p, int level) {

@@ -2,6 +2,7 @@
 // for empty space, each triangle in exactly one node's own run (depth-first order), large
 // triangles kept at inner nodes, maxDepth, tight bounds and bottom-up cubes.
 
+#include "BuiltScene.h"
 #include "OctreeBuilder.h"
 
 #include <ff/builder/ColorCube.h>
@@ -44,19 +45,7 @@ glm::vec3 inOctant(int o, int k = 0) {
                    0.01f * static_cast<float>(k % 7), 0.01f * static_cast<float>(k / 7 % 7), 0.0f);
 }
 
-/** Deterministic pseudo-random numbers in [0, 1). */
-class Lcg {
-public:
-    explicit Lcg(std::uint64_t seed)
-        : mState(seed) {}
-    float next() {
-        mState = mState * 6364136223846793005ull + 1442695040888963407ull;
-        return static_cast<float>(mState >> 40) / static_cast<float>(1ull << 24);
-    }
-
-private:
-    std::uint64_t mState;
-};
+using testing::Lcg;
 
 std::vector<storage::PackedTriangle> randomTriangles(std::size_t count, std::uint64_t seed) {
     Lcg rng(seed);
