@@ -905,16 +905,4 @@ void OcclusionTraversal::Impl::finishFrame() {
         });
 }
 
-const char* occlusionBackendName(OcclusionBackend backend) noexcept {
-    return backend == OcclusionBackend::Hzb ? "hzb" : "queries";
-}
-
-std::optional<OcclusionBackend> parseOcclusionBackend(std::string_view name) noexcept {
-    if (name == "queries")
-        return OcclusionBackend::Queries;
-    if (name == "hzb")
-        return OcclusionBackend::Hzb;
-    return std::nullopt;
-}
-
 } // namespace ff::runtime

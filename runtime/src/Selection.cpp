@@ -1,5 +1,6 @@
 // The names users type and read: --method, --cube-draw, bench scenarios, the HUD.
 
+#include <ff/runtime/FrameContext.h>
 #include <ff/runtime/Selection.h>
 
 #include <array>
@@ -18,6 +19,10 @@ constexpr std::array<std::pair<CubeStyle, const char*>, 3> kCubeStyles = {{
         {CubeStyle::Faces, "faces"},
         {CubeStyle::AreaWeightedPoints, "points"},
 }};
+constexpr std::array<std::pair<OcclusionBackend, const char*>, 2> kOcclusionBackends = {{
+        {OcclusionBackend::Queries, "queries"},
+        {OcclusionBackend::Hzb, "hzb"},
+}};
 
 template <typename Enum, std::size_t N>
 const char* nameIn(const std::array<std::pair<Enum, const char*>, N>& table, Enum value) noexcept {
@@ -29,7 +34,8 @@ const char* nameIn(const std::array<std::pair<Enum, const char*>, N>& table, Enu
 }
 
 template <typename Enum, std::size_t N>
-std::optional<Enum> parseIn(const std::array<std::pair<Enum, const char*>, N>& table, std::string_view text) noexcept {
+std::optional<Enum>
+parseIn(const std::array<std::pair<Enum, const char*>, N>& table, std::string_view text) noexcept {
     for (const auto& [entry, name] : table) {
         if (text == name)
             return entry;
@@ -39,10 +45,24 @@ std::optional<Enum> parseIn(const std::array<std::pair<Enum, const char*>, N>& t
 
 } // namespace
 
-const char* methodName(Method method) noexcept { return nameIn(kMethods, method); }
-std::optional<Method> parseMethod(std::string_view name) noexcept { return parseIn(kMethods, name); }
-const char* cubeStyleName(CubeStyle style) noexcept { return nameIn(kCubeStyles, style); }
-std::optional<CubeStyle> parseCubeStyle(std::string_view name) noexcept { return parseIn(kCubeStyles, name); }
+const char* methodName(Method method) noexcept {
+    return nameIn(kMethods, method);
+}
+std::optional<Method> parseMethod(std::string_view name) noexcept {
+    return parseIn(kMethods, name);
+}
+const char* cubeStyleName(CubeStyle style) noexcept {
+    return nameIn(kCubeStyles, style);
+}
+std::optional<CubeStyle> parseCubeStyle(std::string_view name) noexcept {
+    return parseIn(kCubeStyles, name);
+}
+const char* occlusionBackendName(OcclusionBackend backend) noexcept {
+    return nameIn(kOcclusionBackends, backend);
+}
+std::optional<OcclusionBackend> parseOcclusionBackend(std::string_view name) noexcept {
+    return parseIn(kOcclusionBackends, name);
+}
 
 std::vector<std::string> cubeStyleNames() {
     std::vector<std::string> names;

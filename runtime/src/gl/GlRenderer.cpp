@@ -2,7 +2,7 @@
 
 #include "GlHeaders.h"
 #include "OcclusionQueries.h"
-#include "../DepthPyramid.h"
+#include "PyramidTests.h"
 #include "Shaders.h"
 
 #include <ff/runtime/GlProgram.h>
@@ -107,19 +107,10 @@ struct Renderer::Impl {
     // present(): an RGBA8 view of colorTexture to blit from; made on demand, dropped with the target.
     GLuint presentFramebuffer = 0, presentView = 0;
     std::unique_ptr<gl::OcclusionQueries> queries;
-    // --occlusion-backend hzb: the depth read back when geometry was drawn since the last read.
-    OcclusionBackend occlusionBackend = OcclusionBackend::Queries;
-    bool depthChanged = true;
-    std::vector<float> depthScratch;
-    DepthPyramid pyramid;
-    /** Per ticket of this frame: -1 until answered (at the next submit() or wait, against the
-     *  depth then, which only came nearer: what it hides stays hidden in the finished frame). */
-    std::vector<std::int8_t> pyramidAnswers;
-    std::vector<OcclusionBox> pendingBoxes;
-    std::vector<std::pair<QueryTicket, std::uint32_t>> pendingTickets; ///< ticket, its box count
+    gl::PyramidTests pyramidTests; ///< --occlusion-backend hzb
+    OcclusionBackend occlusionBackend = OcclusionBackend::Queries; ///< this frame's
 
     ~Impl();
-    void answerPendingTests();
     Status ensureTarget(int width, int height);
     Status ensurePresentSource();
     void uploadTransforms(const DrawList& list);
@@ -424,10 +415,7 @@ Status Renderer::beginFrame(const FrameContext& frame, FrameOutput output, Frame
     s.framePixelScale = frame.camera.pixelScale(static_cast<float>(sampleHeight));
     s.queries->beginFrame(s.frameViewProjection);
     s.occlusionBackend = frame.occlusion.backend;
-    s.depthChanged = true;
-    s.pyramidAnswers.clear();
-    s.pendingBoxes.clear();
-    s.pendingTickets.clear();
+    s.pyramidTests.beginFrame(s.frameViewProjection, s.framebuffer, sampleWidth, sampleHeight);
 
     glBindFramebuffer(GL_FRAMEBUFFER, s.framebuffer);
     glViewport(0, 0, sampleWidth, sampleHeight);
@@ -455,7 +443,8 @@ Status Renderer::draw(const DrawList& batch, FrameStats& stats) {
     s.ringSlot = (s.ringSlot + 1) % Impl::kBatchBufferSets;
     s.uploadTransforms(batch);
     FF_RETURN_IF_ERROR(s.drawGeometry(batch, s.frameViewProjection, stats));
-    s.depthChanged = s.depthChanged || !batch.geometry.empty();
+    if (!batch.geometry.empty())
+        s.pyramidTests.depthDrawn();
     s.drawCubes(batch, s.frameViewProjection, s.framePixelScale);
     stats.drawMs += millisecondsSince(start);
     return Status::ok();
@@ -506,41 +495,9 @@ std::vector<bool> Renderer::visibleRuns(const DrawList& batch) {
     return visible;
 }
 
-void Renderer::Impl::answerPendingTests() {
-    if (pendingTickets.empty())
-        return;
-    const int width = frameWidth * frameSupersample;
-    const int height = frameHeight * frameSupersample;
-    if (depthChanged) { // one readback answers every test issued since the last
-        depthScratch.resize(static_cast<std::size_t>(width) * static_cast<std::size_t>(height));
-        glBindFramebuffer(GL_READ_FRAMEBUFFER, framebuffer);
-        glPixelStorei(GL_PACK_ALIGNMENT, 4);
-        glReadPixels(0, 0, width, height, GL_DEPTH_COMPONENT, GL_FLOAT, depthScratch.data());
-        pyramid.build(width, height, depthScratch);
-        depthChanged = false;
-    }
-    std::size_t box = 0;
-    for (const auto& [ticket, count] : pendingTickets) {
-        const auto group = std::span(pendingBoxes).subspan(box, count);
-        box += count;
-        const bool visible = std::any_of(group.begin(), group.end(), [&](const OcclusionBox& b) {
-            return boxMayBeVisible(pyramid, b, frameViewProjection, width, height);
-        });
-        pyramidAnswers[ticket] = visible ? 1 : 0;
-    }
-    pendingBoxes.clear();
-    pendingTickets.clear();
-}
-
 QueryTicket Renderer::issue(std::span<const OcclusionBox> group) {
     Impl& s = *mImpl;
-    if (s.occlusionBackend == OcclusionBackend::Queries)
-        return s.queries->issue(group);
-    const auto ticket = static_cast<QueryTicket>(s.pyramidAnswers.size());
-    s.pyramidAnswers.push_back(-1);
-    s.pendingBoxes.insert(s.pendingBoxes.end(), group.begin(), group.end());
-    s.pendingTickets.emplace_back(ticket, static_cast<std::uint32_t>(group.size()));
-    return ticket;
+    return s.occlusionBackend == OcclusionBackend::Queries ? s.queries->issue(group) : s.pyramidTests.issue(group);
 }
 
 void Renderer::submit() {
@@ -548,25 +505,18 @@ void Renderer::submit() {
     if (s.occlusionBackend == OcclusionBackend::Queries)
         glFlush();
     else
-        s.answerPendingTests();
+        s.pyramidTests.submit();
 }
 
 bool Renderer::ready(QueryTicket ticket) {
     Impl& s = *mImpl;
-    if (s.occlusionBackend == OcclusionBackend::Queries)
-        return s.queries->ready(ticket);
-    return ticket >= s.pyramidAnswers.size() || s.pyramidAnswers[ticket] >= 0;
+    return s.occlusionBackend == OcclusionBackend::Queries ? s.queries->ready(ticket) : s.pyramidTests.ready(ticket);
 }
 
 bool Renderer::anyVisible(QueryTicket ticket) {
     Impl& s = *mImpl;
-    if (s.occlusionBackend == OcclusionBackend::Queries)
-        return s.queries->anyVisible(ticket);
-    if (ticket >= s.pyramidAnswers.size())
-        return true;
-    if (s.pyramidAnswers[ticket] < 0)
-        s.answerPendingTests();
-    return s.pyramidAnswers[ticket] != 0;
+    return s.occlusionBackend == OcclusionBackend::Queries ? s.queries->anyVisible(ticket)
+                                                          : s.pyramidTests.anyVisible(ticket);
 }
 
 bool Renderer::admit(std::uint64_t geometryPage) {
