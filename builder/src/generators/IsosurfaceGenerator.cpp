@@ -21,7 +21,7 @@ namespace {
 constexpr std::array<ParamDef, 2> kParams = {{
         {"resolution",
          "160",
-         "grid cells along each axis (16..1024): 160 gives about 306 k triangles"},
+         "grid cells along each axis (16..1024): 160 gives about 305 k triangles"},
         {"seed", "1", "placement of the side branches"},
 }};
 
