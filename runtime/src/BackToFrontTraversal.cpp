@@ -20,15 +20,6 @@ using detail::kMaxNesting;
 using detail::kTopPriority;
 using detail::toVec3;
 
-/** `--cube-draw auto` draws points up to this ε: every drawn cube then covers at most 4 pixels,
- *  a point at most 2 pixels wide. */
-constexpr float kAutoPointsMaxEpsilon = 2.0f;
-
-bool drawsCubesAsPoints(const SelectionOptions& options) {
-    return options.cubeStyle == CubeStyle::AreaWeightedPoints ||
-           (options.cubeStyle == CubeStyle::Auto && options.epsilonPixels <= kAutoPointsMaxEpsilon);
-}
-
 template <typename T> std::size_t capacityBytes(const std::vector<T>& v) {
     return v.capacity() * sizeof(T);
 }
@@ -138,7 +129,7 @@ void BackToFrontTraversal::flushIfFull() {
 
 Status BackToFrontTraversal::flush() {
     mStats->geometryDraws += detail::mergeGeometryDraws(mList.geometry);
-    mList.cubesAsPoints = drawsCubesAsPoints(mFrame->selection);
+    mList.cubesAsPoints = detail::drawsCubesAsPoints(mFrame->selection);
     if (mSinkStatus.isOk())
         mSinkStatus = mServices->sink.draw(mList, *mStats);
     mList.clear();

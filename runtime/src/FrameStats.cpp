@@ -12,6 +12,7 @@ std::string FrameStats::toJson() const {
             {"instances_entered", instancesEntered},
             {"cubes_drawn", cubesDrawn},
             {"cube_faces_drawn", cubeFacesDrawn},
+            {"occluder_cubes", occluderCubes},
             {"cube_faces_per_level", cubeFacesPerLevel},
             {"triangles_drawn", trianglesDrawn},
             {"geometry_draws", geometryDraws},

@@ -65,6 +65,15 @@ float projectedPixels(
     return nearest > 0.0f ? size * pixelScale / nearest : INFINITY;
 }
 
+/** `--cube-draw auto` draws points up to this ε: every drawn cube then covers at most 4 pixels,
+ *  a point at most 2 pixels wide. */
+constexpr float kAutoPointsMaxEpsilon = 2.0f;
+
+bool drawsCubesAsPoints(const SelectionOptions& options) {
+    return options.cubeStyle == CubeStyle::AreaWeightedPoints ||
+           (options.cubeStyle == CubeStyle::Auto && options.epsilonPixels <= kAutoPointsMaxEpsilon);
+}
+
 bool drawnAsCube(
         const storage::NodeRecord& node, float projected, const SelectionOptions& options) {
     return projected < options.epsilonPixels && (node.flags & storage::kNodeHasCube) &&

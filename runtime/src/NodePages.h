@@ -52,6 +52,9 @@ float projectedPixels(
 /** Whether the ε rule draws the node as its cube at `projected` pixels. */
 bool drawnAsCube(const storage::NodeRecord& node, float projected, const SelectionOptions& options);
 
+/** Whether a frame draws its cubes as area-weighted points (`--cube-draw`), in every pass. */
+bool drawsCubesAsPoints(const SelectionOptions& options);
+
 /** What a walk does with a node it reaches, the same in every traversal. */
 enum class Verdict { Culled, Cube, Refine };
 

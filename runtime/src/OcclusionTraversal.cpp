@@ -195,8 +195,11 @@ struct OcclusionTraversal::Impl {
             const storage::PrototypeRecord* prototype);
     std::uint32_t listIndex(std::uint32_t transform);
     void markVisible(std::uint32_t slot);
-    /** A cube (or a deferred node's) for pass 2 below currentSlot: pulled up like visibility. */
-    void sawCube();
+    /** A cube (or a deferred node's) for pass 2 below currentSlot: pulled up like visibility.
+     *  Drawn here too, as an occluder, where it can occlude (OcclusionOptions::cubesOcclude). */
+    void sawCube(const storage::NodeRecord& node, std::uint32_t transform);
+    /** Whether the cube's faces the eye sees can reach the frame's occluding opacity alone. */
+    bool occludes(const storage::NodeRecord& node, const Transform& t) const;
     void flush();
     /** Pass 1's slots into the history (before pass 2, which reads what had cubes below). */
     void rememberSlots();
@@ -285,6 +288,8 @@ Status OcclusionTraversal::Impl::traverse(
     cubesSeen = false;
     sinkStatus = Status::ok();
     list.clear();
+    list.cubesAsPoints = detail::drawsCubesAsPoints(frame->selection);
+    list.cubesOcclude = true;
     transforms.clear();
     queue.clear();
     slots.clear();
@@ -334,7 +339,7 @@ Status OcclusionTraversal::Impl::traverse(
         process(entry);
         // Without history (the first frame, a jump): once the nearest geometry is known, draw
         // it, so what follows has occluders to be tested against.
-        if (!depthWritten && !list.geometry.empty())
+        if (!depthWritten && (!list.geometry.empty() || !list.cubes.empty()))
             flush();
         if (waiting.size() >= std::max<std::uint32_t>(frame->occlusion.batchNodes, 1))
             issueQueued();
@@ -399,7 +404,7 @@ std::uint32_t OcclusionTraversal::Impl::listIndex(std::uint32_t transform) {
 }
 
 void OcclusionTraversal::Impl::flush() {
-    if (list.geometry.empty())
+    if (list.geometry.empty() && list.cubes.empty())
         return;
     stats->geometryDraws += detail::mergeGeometryDraws(list.geometry);
     if (const Status status = services->sink.draw(list, *stats); !status && sinkStatus.isOk())
@@ -426,7 +431,7 @@ void OcclusionTraversal::Impl::pushChild(
         // Pass 2 draws it. A cube costs less to draw than to test and writes no depth: it is
         // neither tested nor remembered, only seen (its parent stays visible).
         currentSlot = parent;
-        sawCube();
+        sawCube(record, transform);
         markVisible(parent);
         return;
     }
@@ -436,11 +441,34 @@ void OcclusionTraversal::Impl::pushChild(
     std::push_heap(queue.begin(), queue.end(), farther);
 }
 
-void OcclusionTraversal::Impl::sawCube() {
+void OcclusionTraversal::Impl::sawCube(const storage::NodeRecord& node, std::uint32_t transform) {
     cubesSeen = true;
     for (std::uint32_t slot = currentSlot; slot != kNone && !slots[slot].cubesBelow;
          slot = slots[slot].parent)
         slots[slot].cubesBelow = true;
+    if (!frame->occlusion.cubesOcclude || !occludes(node, transforms[transform]))
+        return;
+    // Met front to back (roughly: by its parent's distance), so the opacity it adds in pass 1
+    // is composited in about the order pass 2 composites its color in.
+    list.cubes.push_back(
+            {toVec3(node.cellMin), toVec3(node.cellMax), listIndex(transform), node.cube});
+    ++stats->occluderCubes;
+    if (list.bytes() >= frame->budgets.drawBatchBytes)
+        flush();
+}
+
+bool OcclusionTraversal::Impl::occludes(const storage::NodeRecord& node, const Transform& t) const {
+    // Above 0 translucent faces occlude together; at 0 only a face of alpha 1 can.
+    const std::uint8_t least = frame->occlusion.opacityThreshold > 0.0f ? 1 : 255;
+    const glm::vec3 lo = toVec3(node.cellMin);
+    const glm::vec3 hi = toVec3(node.cellMax);
+    for (int axis = 0; axis < 3; ++axis) {
+        const auto minus = static_cast<std::size_t>(2 * axis);
+        if ((t.localEye[axis] < lo[axis] && node.cube[minus][3] >= least) ||
+            (t.localEye[axis] > hi[axis] && node.cube[minus + 1][3] >= least))
+            return true;
+    }
+    return false;
 }
 
 void OcclusionTraversal::Impl::markVisible(std::uint32_t slot) {
@@ -690,7 +718,7 @@ bool OcclusionTraversal::Impl::enterInstance(
     const storage::PrototypeRecord& prototype = scene.prototypes()[instance.prototype];
     rootRef = prototype.root;
     if (nodePages.readNode(rootRef, priority, root) != Fetch::Ready) {
-        sawCube(); // drawn as its cube (pass 2)
+        sawCube(node, parentTransform); // drawn as its cube (pass 2)
         return false;
     }
     ++stats->instancesEntered;
@@ -711,7 +739,7 @@ OcclusionTraversal::Impl::Expanded OcclusionTraversal::Impl::expandCell(
     const bool geometryReady =
             nodePages.collectGeometry(node, priority, services->uploads, runs) == Fetch::Ready;
     if (!childrenReady || !geometryReady) {
-        sawCube(); // its cube stands in for the subtree (pass 2)
+        sawCube(node, transform); // its cube stands in for the subtree (pass 2)
         return Expanded::Deferred;
     }
     // Decode every child before drawing anything, so a bad child leaves the whole cell to its
@@ -723,7 +751,7 @@ OcclusionTraversal::Impl::Expanded OcclusionTraversal::Impl::expandCell(
         if (!record) {
             nodePages.reportFailure(record.status());
             children.resize(base);
-            sawCube();
+            sawCube(node, transform);
             return Expanded::Deferred;
         }
         children.push_back({*record, childRef});
@@ -789,7 +817,7 @@ void OcclusionTraversal::Impl::drawSubtree(
     if (verdict == detail::Verdict::Culled)
         return;
     if (verdict == detail::Verdict::Cube) {
-        sawCube();
+        sawCube(node, transform);
         return;
     }
     const float priority =

@@ -103,6 +103,38 @@ fs::path buildWallAndStatue(const fs::path& dir) {
     return file;
 }
 
+/** The wall as 10 x 10 tiles (instances of one 1 x 1 slab), and behind it a statue 4 wide
+ *  (12 k triangles: enough below it at a coarse ε to be worth a test). */
+fs::path buildTiledWallAndStatue(const fs::path& dir) {
+    const fs::path file = dir / "tiles.ffs";
+    builder::BuildOptions options;
+    options.memoryBudgetBytes = builder::SceneBuilder::kMinimumBudgetBytes;
+    auto scene = builder::SceneBuilder::create(file, options);
+    EXPECT_TRUE(scene.isOk()) << scene.status().toString();
+    auto tile = (*scene)->addPrototype("tile");
+    auto statue = (*scene)->addPrototype("statue");
+    EXPECT_TRUE(
+            (*scene)->addTriangles(*tile, boxSurface({-0.5f, -0.5f, -0.1f}, {0.5f, 0.5f, 0.1f}, 1))
+                    .isOk());
+    EXPECT_TRUE(
+            (*scene)->addTriangles(
+                            *statue, boxSurface({-2, -2, -2}, {2, 2, 2}, 4 * kStatueSubdivision))
+                    .isOk());
+    for (int x = 0; x < 10; ++x) {
+        for (int y = 0; y < 10; ++y) {
+            glm::dmat4 at(1.0);
+            at[3] = glm::dvec4(x - 4.5, y - 4.5, 0.0, 1.0);
+            EXPECT_TRUE((*scene)->addInstance(*tile, at).isOk());
+        }
+    }
+    glm::dmat4 behind(1.0);
+    behind[3] = glm::dvec4(0.0, 0.0, -4.0, 1.0);
+    EXPECT_TRUE((*scene)->addInstance(*statue, behind).isOk());
+    auto report = (*scene)->finish();
+    EXPECT_TRUE(report.isOk()) << report.status().toString();
+    return file;
+}
+
 fs::path buildGenerated(const fs::path& dir, const std::string& generator) {
     const fs::path file = dir / "scene.ffs";
     builder::BuildOptions options;
@@ -183,6 +215,38 @@ TEST_P(BothBackends, WhatIsBehindAWallNeverReachesGl) {
         EXPECT_GE(culled->stats.nodesOccluded, 1u);
         EXPECT_GE(culled->stats.occlusionQueries, 1u);
         EXPECT_EQ(culled->stats.cubesDrawn, 0u);
+        EXPECT_LE(differingPixels(culled->image, reference->image), allowedPixels(culled->image));
+    }
+}
+
+// Queries only: the depth pyramid does not cull the statue here (not yet understood; noted
+// on issue 15).
+TEST_F(OcclusionCullingTest, OpaqueCubesOcclude) {
+    // At ε = 64 each tile (about 47 pixels wide) is drawn as its color cube, whose face toward
+    // the eye is covered whole (alpha 1); the statue behind is too large to be one.
+    open(buildTiledWallAndStatue(freshDir()));
+    const Camera front = Camera::lookAt({0, 0, 12}, {0, 0, 0}, {0, 1, 0}, 0.8f);
+    constexpr float kEpsilon = 64.0f;
+    auto reference = mPlain->render(frame(front, kEpsilon, false));
+    ASSERT_TRUE(reference.isOk()) << reference.status().toString();
+    ASSERT_GT(reference->stats.trianglesDrawn + reference->stats.cubesDrawn, 100u);
+    // At this ε the statue's subtree is a few dozen cubes: tested all the same.
+    FrameContext with = frame(front, kEpsilon, true);
+    with.occlusion.minTestTriangles = 16;
+    FrameContext without = with;
+    without.occlusion.cubesOcclude = false;
+    auto seenThrough = mOrderOnly->render(without);
+    ASSERT_TRUE(seenThrough.isOk()) << seenThrough.status().toString();
+    EXPECT_EQ(seenThrough->stats.nodesOccluded, 0u); // cubes write no depth: nothing hides it
+    for (int f = 0; f < 3; ++f) {
+        SCOPED_TRACE("frame " + std::to_string(f));
+        auto culled = mCulling->render(with);
+        ASSERT_TRUE(culled.isOk()) << culled.status().toString();
+        EXPECT_GE(culled->stats.occluderCubes, 1u);
+        EXPECT_GE(culled->stats.nodesOccluded, 1u);
+        EXPECT_LT(
+                culled->stats.trianglesDrawn + culled->stats.cubesDrawn,
+                seenThrough->stats.trianglesDrawn + seenThrough->stats.cubesDrawn);
         EXPECT_LE(differingPixels(culled->image, reference->image), allowedPixels(culled->image));
     }
 }

@@ -86,6 +86,21 @@ void addOcclusionOptions(CLI::App& cmd, runtime::OcclusionOptions& occlusion, bo
                "max-depth pyramid of the depth read back, tested on the CPU (hzb)")
             ->check(CLI::IsMember({"queries", "hzb"}))
             ->default_str(runtime::occlusionBackendName(occlusion.backend));
+    cmd.add_option_function<std::string>(
+               "--cube-occluders",
+               [&occlusion](const std::string& mode) { occlusion.cubesOcclude = mode == "on"; },
+               "With occlusion culling: color cubes occlude too, drawn front to back to depth where "
+               "the opacity over a pixel reaches 1 - the opacity threshold")
+            ->check(CLI::IsMember({"on", "off"}))
+            ->default_str(occlusion.cubesOcclude ? "on" : "off");
+    cmd.add_option(
+               "--opacity-threshold",
+               occlusion.opacityThreshold,
+               "Aggregate opacity: translucent cubes occlude together once at most this share of "
+               "light shows through a pixel (0: only faces of alpha 1 occlude, exact; above 0: "
+               "approximate)")
+            ->check(CLI::Range(0.0f, 0.5f))
+            ->capture_default_str();
     cmd.add_option(
                "--occlusion-queries",
                occlusion.queryBudget,

@@ -15,6 +15,7 @@
 #include <algorithm>
 #include <array>
 #include <chrono>
+#include <cmath>
 #include <initializer_list>
 #include <cstddef>
 #include <string>
@@ -57,6 +58,21 @@ double millisecondsSince(std::chrono::steady_clock::time_point start) {
     return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
 }
 
+/** The occluder shader's opacity sum is -log2(transmittance) in these steps. */
+constexpr double kOpacityUnit = 65536.0;
+/** The sum of a face of alpha 1 (the threshold at δ = 0): more than 255 faces of alpha 254/255. */
+constexpr GLuint kOpaqueSum = 1u << 24;
+/** An occluder's depth lies this far (4 steps of the 24-bit depth buffer) behind its face. */
+constexpr float kOccluderDepthBias = 4.0f / 16777216.0f;
+
+/** The sum at which a sample's transmittance has fallen to `threshold` (0: only opaque faces). */
+GLuint occludingOpacity(float threshold) {
+    if (!(threshold > 0.0f))
+        return kOpaqueSum;
+    const double sum = std::ceil(-std::log2(static_cast<double>(std::min(threshold, 1.0f))) * kOpacityUnit);
+    return static_cast<GLuint>(std::clamp(sum, 1.0, static_cast<double>(kOpaqueSum)));
+}
+
 } // namespace
 
 struct Renderer::Impl {
@@ -64,6 +80,8 @@ struct Renderer::Impl {
     GLuint geometryProgram = 0;
     GLuint cubeProgram = 0;
     GLuint cubePointProgram = 0;
+    GLuint cubeOccluderProgram = 0;      ///< cubes as occluders (OcclusionOptions::cubesOcclude)
+    GLuint cubePointOccluderProgram = 0; ///< the same for cubes drawn as points
     GLuint geometryVao = 0;
     GLuint cubeVao = 0;
     // The page arena: one slot per resident geometry page.
@@ -83,6 +101,7 @@ struct Renderer::Impl {
     int frameWidth = 0, frameHeight = 0, frameSupersample = 1;
     glm::mat4 frameViewProjection{1.0f};
     float framePixelScale = 1.0f;
+    GLuint frameOccludes = 0; ///< the opacity sum at which a sample occludes (cube occluders)
     std::uint32_t uploadLimit = 0;              ///< FrameBudgets::gpuUploadsPerFrame
     std::unordered_set<std::uint64_t> admitted; ///< pages not in the arena admitted this frame
     // Per-batch buffers, a ring of them: rewriting a buffer the GPU may still be reading (the
@@ -102,6 +121,8 @@ struct Renderer::Impl {
     std::vector<glm::vec4> eyeScratch;
     // Render target.
     GLuint framebuffer = 0, colorTexture = 0, depthBuffer = 0;
+    /** Opacity composited over each sample by occluder cubes (kCubeOccluderFragmentShader). */
+    GLuint opacityTexture = 0;
     int targetWidth = 0, targetHeight = 0;
     std::vector<std::uint8_t> readback;
     // present(): an RGBA8 view of colorTexture to blit from; made on demand, dropped with the target.
@@ -133,8 +154,11 @@ Renderer::Impl::~Impl() {
     glDeleteProgram(geometryProgram);
     glDeleteProgram(cubeProgram);
     glDeleteProgram(cubePointProgram);
+    glDeleteProgram(cubeOccluderProgram);
+    glDeleteProgram(cubePointOccluderProgram);
     glDeleteFramebuffers(1, &framebuffer);
     glDeleteTextures(1, &colorTexture);
+    glDeleteTextures(1, &opacityTexture);
     glDeleteRenderbuffers(1, &depthBuffer);
     glDeleteFramebuffers(1, &presentFramebuffer);
     glDeleteTextures(1, &presentView);
@@ -151,6 +175,10 @@ Result<std::unique_ptr<Renderer>> Renderer::create(const storage::SceneFile& sce
     FF_ASSIGN_OR_RETURN(impl->cubeProgram, linkGlProgram({gl::kCubeShaderInputs, gl::kCubeVertexShader}, gl::kCubeFragmentShader));
     FF_ASSIGN_OR_RETURN(impl->queries, gl::OcclusionQueries::create());
     FF_ASSIGN_OR_RETURN(impl->cubePointProgram, linkGlProgram({gl::kCubeShaderInputs, gl::kCubePointVertexShader}, gl::kCubeFragmentShader));
+    FF_ASSIGN_OR_RETURN(impl->cubeOccluderProgram,
+                        linkGlProgram({gl::kCubeShaderInputs, gl::kCubeVertexShader}, gl::kCubeOccluderFragmentShader));
+    FF_ASSIGN_OR_RETURN(impl->cubePointOccluderProgram, linkGlProgram({gl::kCubeShaderInputs, gl::kCubePointVertexShader},
+                                                                      gl::kCubeOccluderFragmentShader));
 
     // Slots hold a page's triangles without its trailer, so vertex offsets stay whole vertices.
     const std::uint32_t trianglesPerPage = storage::trianglesPerPage(scene.pageSize());
@@ -230,10 +258,14 @@ Status Renderer::Impl::ensureTarget(int width, int height) {
                                                           " exceeds the GL limit of " + std::to_string(maxSize));
     glDeleteFramebuffers(1, &framebuffer);
     glDeleteTextures(1, &colorTexture);
+    glDeleteTextures(1, &opacityTexture);
     glDeleteRenderbuffers(1, &depthBuffer);
     glDeleteFramebuffers(1, &presentFramebuffer);
     glDeleteTextures(1, &presentView);
     presentFramebuffer = presentView = 0;
+    glGenTextures(1, &opacityTexture);
+    glBindTexture(GL_TEXTURE_2D, opacityTexture);
+    glTexStorage2D(GL_TEXTURE_2D, 1, GL_R32UI, width, height);
     glGenTextures(1, &colorTexture);
     glBindTexture(GL_TEXTURE_2D, colorTexture);
     glTexStorage2D(GL_TEXTURE_2D, 1, GL_SRGB8_ALPHA8, width, height);
@@ -344,14 +376,24 @@ void Renderer::Impl::drawCubes(const DrawList& list, const glm::mat4& viewProjec
     BatchBuffers& set = current();
     ensureCapacity(set.cubes, set.cubesCap, bytes);
     bufferSubData(set.cubes, 0, bytes, list.cubes.data());
-    const GLuint program = list.cubesAsPoints ? cubePointProgram : cubeProgram;
+    const GLuint program = list.cubesOcclude ? (list.cubesAsPoints ? cubePointOccluderProgram : cubeOccluderProgram)
+                                             : (list.cubesAsPoints ? cubePointProgram : cubeProgram);
     glUseProgram(program);
     glUniformMatrix4fv(glGetUniformLocation(program, "uViewProjection"), 1, GL_FALSE, glm::value_ptr(viewProjection));
     glBindVertexArray(cubeVao);
     glBindVertexBuffer(0, set.cubes, 0, sizeof(CubeDraw));
-    glEnable(GL_BLEND);
-    glBlendFunc(GL_ONE, GL_ONE_MINUS_SRC_ALPHA); // premultiplied "over", back to front
-    glDepthMask(GL_FALSE);
+    if (list.cubesOcclude) {
+        // Depth only; the opacity sums of earlier batches must be visible to this one's loads.
+        glMemoryBarrier(GL_SHADER_IMAGE_ACCESS_BARRIER_BIT);
+        glBindImageTexture(0, opacityTexture, 0, GL_FALSE, 0, GL_READ_WRITE, GL_R32UI);
+        glUniform1ui(glGetUniformLocation(program, "uOccludes"), frameOccludes);
+        glUniform1f(glGetUniformLocation(program, "uDepthBias"), kOccluderDepthBias);
+        glColorMask(GL_FALSE, GL_FALSE, GL_FALSE, GL_FALSE);
+    } else {
+        glEnable(GL_BLEND);
+        glBlendFunc(GL_ONE, GL_ONE_MINUS_SRC_ALPHA); // premultiplied "over", back to front
+        glDepthMask(GL_FALSE);
+    }
     if (list.cubesAsPoints) {
         glUniform1f(glGetUniformLocation(program, "uPixelScale"), pixelScale);
         glEnable(GL_PROGRAM_POINT_SIZE);
@@ -362,6 +404,7 @@ void Renderer::Impl::drawCubes(const DrawList& list, const glm::mat4& viewProjec
     }
     glDepthMask(GL_TRUE);
     glDisable(GL_BLEND);
+    glColorMask(GL_TRUE, GL_TRUE, GL_TRUE, GL_TRUE);
 }
 
 void Renderer::Impl::uploadTransforms(const DrawList& list) {
@@ -415,6 +458,7 @@ Status Renderer::beginFrame(const FrameContext& frame, FrameOutput output, Frame
     s.framePixelScale = frame.camera.pixelScale(static_cast<float>(sampleHeight));
     s.queries->beginFrame(s.frameViewProjection);
     s.occlusionBackend = frame.occlusion.backend;
+    s.frameOccludes = occludingOpacity(frame.occlusion.opacityThreshold);
     s.pyramidTests.beginFrame(s.frameViewProjection, s.framebuffer, sampleWidth, sampleHeight);
 
     glBindFramebuffer(GL_FRAMEBUFFER, s.framebuffer);
@@ -433,6 +477,10 @@ Status Renderer::beginFrame(const FrameContext& frame, FrameOutput output, Frame
     glClearColor(clearColor.r, clearColor.g, clearColor.b, clearColor.a);
     glClearDepth(1.0);
     glClear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
+    if (frame.occlusion.enabled && frame.occlusion.cubesOcclude) {
+        const GLuint nothing = 0;
+        glClearTexImage(s.opacityTexture, 0, GL_RED_INTEGER, GL_UNSIGNED_INT, &nothing);
+    }
     stats.drawMs += millisecondsSince(start);
     return Status::ok();
 }
@@ -443,7 +491,7 @@ Status Renderer::draw(const DrawList& batch, FrameStats& stats) {
     s.ringSlot = (s.ringSlot + 1) % Impl::kBatchBufferSets;
     s.uploadTransforms(batch);
     FF_RETURN_IF_ERROR(s.drawGeometry(batch, s.frameViewProjection, stats));
-    if (!batch.geometry.empty())
+    if (!batch.geometry.empty() || (batch.cubesOcclude && !batch.cubes.empty()))
         s.pyramidTests.depthDrawn();
     s.drawCubes(batch, s.frameViewProjection, s.framePixelScale);
     stats.drawMs += millisecondsSince(start);

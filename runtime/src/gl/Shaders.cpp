@@ -122,4 +122,27 @@ layout(location = 0) out vec4 fragColor;
 void main() { fragColor = vColor; }
 )";
 
+const char* const kCubeOccluderFragmentShader = R"(#version 450 core
+in vec4 vColor;
+// The opacity composited over each sample so far, as -log2(transmittance) in 1/65536ths: a sum,
+// so fragments add to it in any order (atomically) and the total is the same.
+layout(r32ui, binding = 0) uniform coherent uimage2D uOpacity;
+uniform uint uOccludes;   // the sum at which a sample's transmittance reaches the threshold
+uniform float uDepthBias; // the depth written lies this far behind the face (see below)
+void main() {
+    ivec2 sampleAt = ivec2(gl_FragCoord.xy);
+    float alpha = vColor.a;
+    uint add = alpha >= 1.0 - 0.5 / 255.0 ? uOccludes
+                                          : uint(min(-log2(1.0 - alpha) * 65536.0, float(uOccludes)));
+    uint before = imageLoad(uOpacity, sampleAt).x;
+    if (before < uOccludes && add > 0u)
+        before = imageAtomicAdd(uOpacity, sampleAt, add);
+    if (before + add < uOccludes)
+        discard; // light still shows through: no depth
+    // A hair behind the face, so the color pass's own fragment still passes GL_LESS (points
+    // have no polygon offset).
+    gl_FragDepth = min(gl_FragCoord.z + uDepthBias, 1.0);
+}
+)";
+
 } // namespace ff::runtime::gl

@@ -13,5 +13,8 @@ extern const char* const kCubeVertexShader;
 extern const char* const kCubeFragmentShader;
 /** Small color cubes: one point per cube, faces blended by projected area. */
 extern const char* const kCubePointVertexShader;
+/** Either cube vertex shader's fragments as occluders: depth only, where the opacity
+ *  accumulated over the sample (an r32ui image) reaches the frame's threshold. */
+extern const char* const kCubeOccluderFragmentShader;
 
 } // namespace ff::runtime::gl

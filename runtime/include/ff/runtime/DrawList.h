@@ -40,6 +40,9 @@ struct DrawList {
     std::vector<CubeDraw> cubes;
     /** Draw the cubes as area-weighted points (each covers at most a few pixels) rather than as faces. */
     bool cubesAsPoints = false;
+    /** The cubes are occluders (OcclusionOptions::cubesOcclude): drawn to depth only, where the
+     *  opacity accumulated over a pixel reaches the frame's threshold, not in color. */
+    bool cubesOcclude = false;
 
     /** Bytes the entries take now (what FrameBudgets::drawBatchBytes bounds). */
     std::size_t bytes() const noexcept {

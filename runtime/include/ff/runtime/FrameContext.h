@@ -66,6 +66,14 @@ struct OcclusionOptions {
      *  per triangle it could save is not made (the node is drawn). On llvmpipe a triangle costs
      *  about as much as 20 pixels of a depth-only box (docs/methods.md §9). */
     float testPixelsPerTriangle = 20.0f;
+    /** Color cubes met by the front-to-back walk are drawn there too, depth only, as occluders:
+     *  a pixel is hidden behind them once the opacity accumulated over it reaches
+     *  1 - opacityThreshold (the faces' alpha composited front to back). At 0, only faces of
+     *  alpha 1 occlude (exact: nothing shows through them); above 0 (aggregate opacity, after
+     *  Zhang et al.'s hierarchical occlusion maps) translucent cubes occlude together what at
+     *  most that share of light would show through: approximate. */
+    bool cubesOcclude = true;
+    float opacityThreshold = 0.0f;
 };
 
 /**

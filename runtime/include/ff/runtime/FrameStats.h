@@ -14,6 +14,8 @@ struct FrameStats {
     std::uint64_t instancesEntered = 0; ///< instance nodes refined into their prototype
     std::uint64_t cubesDrawn = 0;
     std::uint64_t cubeFacesDrawn = 0; ///< front-facing faces of drawn cubes
+    /** Cubes also drawn as occluders (depth only) by the front-to-back walk. */
+    std::uint64_t occluderCubes = 0;
     /** Front-facing cube faces drawn per level of their own hierarchy (index = level). */
     std::vector<std::uint64_t> cubeFacesPerLevel;
     std::uint64_t trianglesDrawn = 0;
