@@ -81,71 +81,67 @@ constexpr int kStatueSubdivision = 8; // 768 triangles: worth a test
 constexpr std::uint64_t kWallTriangles = 12;
 constexpr std::uint64_t kStatueTriangles = 12 * kStatueSubdivision * kStatueSubdivision;
 
-/** A 10 x 10 wall at z = 0 and, behind it (z = -4), a statue 2 units wide. */
-fs::path buildWallAndStatue(const fs::path& dir) {
-    const fs::path file = dir / "wall.ffs";
+/** Builds `file` with what `fill` adds, within the smallest memory budget. */
+template <typename Fill> fs::path buildScene(const fs::path& file, Fill&& fill) {
     builder::BuildOptions options;
     options.memoryBudgetBytes = builder::SceneBuilder::kMinimumBudgetBytes;
     auto scene = builder::SceneBuilder::create(file, options);
     EXPECT_TRUE(scene.isOk()) << scene.status().toString();
-    auto wall = (*scene)->addPrototype("wall");
-    auto statue = (*scene)->addPrototype("statue");
-    EXPECT_TRUE((*scene)->addTriangles(*wall, boxSurface({-5, -5, -0.1f}, {5, 5, 0.1f}, 1)).isOk());
-    EXPECT_TRUE(
-            (*scene)->addTriangles(*statue, boxSurface({-1, -1, -1}, {1, 1, 1}, kStatueSubdivision))
-                    .isOk());
-    EXPECT_TRUE((*scene)->addInstance(*wall, glm::dmat4(1.0)).isOk());
-    glm::dmat4 behind(1.0);
-    behind[3] = glm::dvec4(0.0, 0.0, -4.0, 1.0);
-    EXPECT_TRUE((*scene)->addInstance(*statue, behind).isOk());
+    if (!scene)
+        return file;
+    fill(**scene);
     auto report = (*scene)->finish();
     EXPECT_TRUE(report.isOk()) << report.status().toString();
     return file;
+}
+
+/** A statue, the box [-half, half]³ with faces of n x n quads, placed at z = -4. */
+void addStatueBehind(builder::SceneBuilder& scene, float half, int n) {
+    auto statue = scene.addPrototype("statue");
+    EXPECT_TRUE(
+            scene.addTriangles(*statue, boxSurface(glm::vec3(-half), glm::vec3(half), n)).isOk());
+    glm::dmat4 behind(1.0);
+    behind[3] = glm::dvec4(0.0, 0.0, -4.0, 1.0);
+    EXPECT_TRUE(scene.addInstance(*statue, behind).isOk());
+}
+
+/** A 10 x 10 wall at z = 0 and, behind it (z = -4), a statue 2 units wide. */
+fs::path buildWallAndStatue(const fs::path& dir) {
+    return buildScene(dir / "wall.ffs", [](builder::SceneBuilder& scene) {
+        auto wall = scene.addPrototype("wall");
+        EXPECT_TRUE(scene.addTriangles(*wall, boxSurface({-5, -5, -0.1f}, {5, 5, 0.1f}, 1)).isOk());
+        EXPECT_TRUE(scene.addInstance(*wall, glm::dmat4(1.0)).isOk());
+        addStatueBehind(scene, 1.0f, kStatueSubdivision);
+    });
 }
 
 /** The wall as 10 x 10 tiles (instances of one 1 x 1 slab), and behind it a statue 4 wide
  *  (12 k triangles: enough below it at a coarse ε to be worth a test). */
 fs::path buildTiledWallAndStatue(const fs::path& dir) {
-    const fs::path file = dir / "tiles.ffs";
-    builder::BuildOptions options;
-    options.memoryBudgetBytes = builder::SceneBuilder::kMinimumBudgetBytes;
-    auto scene = builder::SceneBuilder::create(file, options);
-    EXPECT_TRUE(scene.isOk()) << scene.status().toString();
-    auto tile = (*scene)->addPrototype("tile");
-    auto statue = (*scene)->addPrototype("statue");
-    EXPECT_TRUE(
-            (*scene)->addTriangles(*tile, boxSurface({-0.5f, -0.5f, -0.1f}, {0.5f, 0.5f, 0.1f}, 1))
-                    .isOk());
-    EXPECT_TRUE(
-            (*scene)->addTriangles(
-                            *statue, boxSurface({-2, -2, -2}, {2, 2, 2}, 4 * kStatueSubdivision))
-                    .isOk());
-    for (int x = 0; x < 10; ++x) {
-        for (int y = 0; y < 10; ++y) {
-            glm::dmat4 at(1.0);
-            at[3] = glm::dvec4(x - 4.5, y - 4.5, 0.0, 1.0);
-            EXPECT_TRUE((*scene)->addInstance(*tile, at).isOk());
+    return buildScene(dir / "tiles.ffs", [](builder::SceneBuilder& scene) {
+        auto tile = scene.addPrototype("tile");
+        EXPECT_TRUE(
+                scene.addTriangles(*tile, boxSurface({-0.5f, -0.5f, -0.1f}, {0.5f, 0.5f, 0.1f}, 1))
+                        .isOk());
+        for (int x = 0; x < 10; ++x) {
+            for (int y = 0; y < 10; ++y) {
+                glm::dmat4 at(1.0);
+                at[3] = glm::dvec4(x - 4.5, y - 4.5, 0.0, 1.0);
+                EXPECT_TRUE(scene.addInstance(*tile, at).isOk());
+            }
         }
-    }
-    glm::dmat4 behind(1.0);
-    behind[3] = glm::dvec4(0.0, 0.0, -4.0, 1.0);
-    EXPECT_TRUE((*scene)->addInstance(*statue, behind).isOk());
-    auto report = (*scene)->finish();
-    EXPECT_TRUE(report.isOk()) << report.status().toString();
-    return file;
+        addStatueBehind(scene, 2.0f, 4 * kStatueSubdivision);
+    });
 }
 
 fs::path buildGenerated(const fs::path& dir, const std::string& generator) {
-    const fs::path file = dir / "scene.ffs";
-    builder::BuildOptions options;
-    options.memoryBudgetBytes = builder::SceneBuilder::kMinimumBudgetBytes;
-    auto scene = builder::SceneBuilder::create(file, options);
-    EXPECT_TRUE(scene.isOk()) << scene.status().toString();
-    auto spec = builder::parseGeneratorSpec(generator);
-    EXPECT_TRUE(spec.isOk());
-    EXPECT_TRUE(builder::runGenerator(*spec, **scene).isOk());
-    EXPECT_TRUE((*scene)->finish().isOk());
-    return file;
+    return buildScene(dir / "scene.ffs", [&](builder::SceneBuilder& scene) {
+        auto spec = builder::parseGeneratorSpec(generator);
+        EXPECT_TRUE(spec.isOk());
+        if (spec) {
+            EXPECT_TRUE(builder::runGenerator(*spec, scene).isOk());
+        }
+    });
 }
 
 class OcclusionCullingTest : public ::testing::Test {
