@@ -259,15 +259,7 @@ void BackToFrontTraversal::emitCube(
     const glm::vec3 boxMin = toVec3(node.cellMin);
     const glm::vec3 boxMax = toVec3(node.cellMax);
     ++mStats->cubesDrawn;
-    // The faces a viewer can see: those whose outer side holds the eye.
-    const glm::vec3& eye = mActive[active].localEye;
-    std::uint64_t faces = 0;
-    for (int axis = 0; axis < 3; ++axis) {
-        if (eye[axis] < boxMin[axis] && node.cube[static_cast<std::size_t>(2 * axis)][3] > 0)
-            ++faces;
-        if (eye[axis] > boxMax[axis] && node.cube[static_cast<std::size_t>(2 * axis + 1)][3] > 0)
-            ++faces;
-    }
+    const std::uint64_t faces = detail::cubeFacesToward(node, mActive[active].localEye, 1);
     if (mStats->cubeFacesPerLevel.size() <= node.level)
         mStats->cubeFacesPerLevel.resize(node.level + 1u, 0);
     mStats->cubeFacesPerLevel[node.level] += faces;

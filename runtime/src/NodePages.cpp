@@ -74,6 +74,21 @@ bool drawsCubesAsPoints(const SelectionOptions& options) {
            (options.cubeStyle == CubeStyle::Auto && options.epsilonPixels <= kAutoPointsMaxEpsilon);
 }
 
+std::uint32_t cubeFacesToward(
+        const storage::NodeRecord& node, const glm::vec3& localEye, std::uint8_t leastAlpha) {
+    const glm::vec3 lo = toVec3(node.cellMin);
+    const glm::vec3 hi = toVec3(node.cellMax);
+    std::uint32_t faces = 0;
+    for (int axis = 0; axis < 3; ++axis) {
+        const auto minus = static_cast<std::size_t>(2 * axis);
+        if (localEye[axis] < lo[axis] && node.cube[minus][3] >= leastAlpha)
+            ++faces;
+        if (localEye[axis] > hi[axis] && node.cube[minus + 1][3] >= leastAlpha)
+            ++faces;
+    }
+    return faces;
+}
+
 bool drawnAsCube(
         const storage::NodeRecord& node, float projected, const SelectionOptions& options) {
     return projected < options.epsilonPixels && (node.flags & storage::kNodeHasCube) &&

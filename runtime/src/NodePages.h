@@ -52,6 +52,11 @@ float projectedPixels(
 /** Whether the ε rule draws the node as its cube at `projected` pixels. */
 bool drawnAsCube(const storage::NodeRecord& node, float projected, const SelectionOptions& options);
 
+/** The node's cube faces a viewer at `localEye` sees (those whose outer side holds the eye) of
+ *  alpha at least `leastAlpha`. */
+std::uint32_t cubeFacesToward(
+        const storage::NodeRecord& node, const glm::vec3& localEye, std::uint8_t leastAlpha);
+
 /** Whether a frame draws its cubes as area-weighted points (`--cube-draw`), in every pass. */
 bool drawsCubesAsPoints(const SelectionOptions& options);
 

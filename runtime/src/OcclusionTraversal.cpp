@@ -198,8 +198,6 @@ struct OcclusionTraversal::Impl {
     /** A cube (or a deferred node's) for pass 2 below currentSlot: pulled up like visibility.
      *  Drawn here too, as an occluder, where it can occlude (OcclusionOptions::cubesOcclude). */
     void sawCube(const storage::NodeRecord& node, std::uint32_t transform);
-    /** Whether the cube's faces the eye sees can reach the frame's occluding opacity alone. */
-    bool occludes(const storage::NodeRecord& node, const Transform& t) const;
     void flush();
     /** Pass 1's slots into the history (before pass 2, which reads what had cubes below). */
     void rememberSlots();
@@ -446,7 +444,10 @@ void OcclusionTraversal::Impl::sawCube(const storage::NodeRecord& node, std::uin
     for (std::uint32_t slot = currentSlot; slot != kNone && !slots[slot].cubesBelow;
          slot = slots[slot].parent)
         slots[slot].cubesBelow = true;
-    if (!frame->occlusion.cubesOcclude || !occludes(node, transforms[transform]))
+    // At threshold 0 only a face of alpha 1 can occlude; above it translucent faces add up.
+    const std::uint8_t leastAlpha = frame->occlusion.opacityThreshold > 0.0f ? 1 : 255;
+    if (!frame->occlusion.cubesOcclude ||
+        detail::cubeFacesToward(node, transforms[transform].localEye, leastAlpha) == 0)
         return;
     // Met front to back (roughly: by its parent's distance), so the opacity it adds in pass 1
     // is composited in about the order pass 2 composites its color in.
@@ -457,19 +458,6 @@ void OcclusionTraversal::Impl::sawCube(const storage::NodeRecord& node, std::uin
         flush();
 }
 
-bool OcclusionTraversal::Impl::occludes(const storage::NodeRecord& node, const Transform& t) const {
-    // Above 0 translucent faces occlude together; at 0 only a face of alpha 1 can.
-    const std::uint8_t least = frame->occlusion.opacityThreshold > 0.0f ? 1 : 255;
-    const glm::vec3 lo = toVec3(node.cellMin);
-    const glm::vec3 hi = toVec3(node.cellMax);
-    for (int axis = 0; axis < 3; ++axis) {
-        const auto minus = static_cast<std::size_t>(2 * axis);
-        if ((t.localEye[axis] < lo[axis] && node.cube[minus][3] >= least) ||
-            (t.localEye[axis] > hi[axis] && node.cube[minus + 1][3] >= least))
-            return true;
-    }
-    return false;
-}
 
 void OcclusionTraversal::Impl::markVisible(std::uint32_t slot) {
     while (slot != kNone && !slots[slot].visible) {

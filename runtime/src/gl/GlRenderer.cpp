@@ -121,7 +121,8 @@ struct Renderer::Impl {
     std::vector<glm::vec4> eyeScratch;
     // Render target.
     GLuint framebuffer = 0, colorTexture = 0, depthBuffer = 0;
-    /** Opacity composited over each sample by occluder cubes (kCubeOccluderFragmentShader). */
+    /** Opacity composited over each sample by occluder cubes (kCubeOccluderFragmentShader);
+     *  made by the first frame with cube occluders, dropped with the target. */
     GLuint opacityTexture = 0;
     int targetWidth = 0, targetHeight = 0;
     std::vector<std::uint8_t> readback;
@@ -262,10 +263,7 @@ Status Renderer::Impl::ensureTarget(int width, int height) {
     glDeleteRenderbuffers(1, &depthBuffer);
     glDeleteFramebuffers(1, &presentFramebuffer);
     glDeleteTextures(1, &presentView);
-    presentFramebuffer = presentView = 0;
-    glGenTextures(1, &opacityTexture);
-    glBindTexture(GL_TEXTURE_2D, opacityTexture);
-    glTexStorage2D(GL_TEXTURE_2D, 1, GL_R32UI, width, height);
+    presentFramebuffer = presentView = opacityTexture = 0;
     glGenTextures(1, &colorTexture);
     glBindTexture(GL_TEXTURE_2D, colorTexture);
     glTexStorage2D(GL_TEXTURE_2D, 1, GL_SRGB8_ALPHA8, width, height);
@@ -478,6 +476,11 @@ Status Renderer::beginFrame(const FrameContext& frame, FrameOutput output, Frame
     glClearDepth(1.0);
     glClear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
     if (frame.occlusion.enabled && frame.occlusion.cubesOcclude) {
+        if (!s.opacityTexture) { // made for the frames that use it, at the target's size
+            glGenTextures(1, &s.opacityTexture);
+            glBindTexture(GL_TEXTURE_2D, s.opacityTexture);
+            glTexStorage2D(GL_TEXTURE_2D, 1, GL_R32UI, sampleWidth, sampleHeight);
+        }
         const GLuint nothing = 0;
         glClearTexImage(s.opacityTexture, 0, GL_RED_INTEGER, GL_UNSIGNED_INT, &nothing);
     }
