@@ -121,8 +121,9 @@ struct Renderer::Impl {
     std::vector<glm::vec4> eyeScratch;
     // Render target.
     GLuint framebuffer = 0, colorTexture = 0, depthBuffer = 0;
-    /** Opacity composited over each sample by occluder cubes (kCubeOccluderFragmentShader);
-     *  made by the first frame with cube occluders, dropped with the target. */
+    /** Opacity composited over each sample by occluder cubes and the farthest depth in it, two
+     *  layers (kCubeOccluderFragmentShader); made by the first frame with cube occluders,
+     *  dropped with the target. */
     GLuint opacityTexture = 0;
     int targetWidth = 0, targetHeight = 0;
     std::vector<std::uint8_t> readback;
@@ -383,7 +384,7 @@ void Renderer::Impl::drawCubes(const DrawList& list, const glm::mat4& viewProjec
     if (list.cubesOcclude) {
         // Depth only; the opacity sums of earlier batches must be visible to this one's loads.
         glMemoryBarrier(GL_SHADER_IMAGE_ACCESS_BARRIER_BIT);
-        glBindImageTexture(0, opacityTexture, 0, GL_FALSE, 0, GL_READ_WRITE, GL_R32UI);
+        glBindImageTexture(0, opacityTexture, 0, GL_TRUE, 0, GL_READ_WRITE, GL_R32UI);
         glUniform1ui(glGetUniformLocation(program, "uOccludes"), frameOccludes);
         glUniform1f(glGetUniformLocation(program, "uDepthBias"), kOccluderDepthBias);
         glColorMask(GL_FALSE, GL_FALSE, GL_FALSE, GL_FALSE);
@@ -478,8 +479,8 @@ Status Renderer::beginFrame(const FrameContext& frame, FrameOutput output, Frame
     if (frame.occlusion.enabled && frame.occlusion.cubesOcclude) {
         if (!s.opacityTexture) { // made for the frames that use it, at the target's size
             glGenTextures(1, &s.opacityTexture);
-            glBindTexture(GL_TEXTURE_2D, s.opacityTexture);
-            glTexStorage2D(GL_TEXTURE_2D, 1, GL_R32UI, sampleWidth, sampleHeight);
+            glBindTexture(GL_TEXTURE_2D_ARRAY, s.opacityTexture);
+            glTexStorage3D(GL_TEXTURE_2D_ARRAY, 1, GL_R32UI, sampleWidth, sampleHeight, 2);
         }
         const GLuint nothing = 0;
         glClearTexImage(s.opacityTexture, 0, GL_RED_INTEGER, GL_UNSIGNED_INT, &nothing);

@@ -124,24 +124,34 @@ void main() { fragColor = vColor; }
 
 const char* const kCubeOccluderFragmentShader = R"(#version 450 core
 in vec4 vColor;
-// The opacity composited over each sample so far, as -log2(transmittance) in 1/65536ths: a sum,
-// so fragments add to it in any order (atomically) and the total is the same.
-layout(r32ui, binding = 0) uniform coherent uimage2D uOpacity;
+// Per sample, layer 0: the opacity composited so far, as -log2(transmittance) in 1/65536ths, a
+// sum, so fragments add to it in any order (atomically) and the total is the same. Layer 1: the
+// farthest depth among the fragments in that sum (as bits: depths are non-negative floats).
+layout(r32ui, binding = 0) uniform coherent uimage2DArray uOpacity;
 uniform uint uOccludes;   // the sum at which a sample's transmittance reaches the threshold
 uniform float uDepthBias; // the depth written lies this far behind the face (see below)
 void main() {
-    ivec2 sampleAt = ivec2(gl_FragCoord.xy);
+    ivec3 sum = ivec3(gl_FragCoord.xy, 0);
+    ivec3 farthest = ivec3(gl_FragCoord.xy, 1);
+    float depth = gl_FragCoord.z;
     float alpha = vColor.a;
-    uint add = alpha >= 1.0 - 0.5 / 255.0 ? uOccludes
-                                          : uint(min(-log2(1.0 - alpha) * 65536.0, float(uOccludes)));
-    uint before = imageLoad(uOpacity, sampleAt).x;
-    if (before < uOccludes && add > 0u)
-        before = imageAtomicAdd(uOpacity, sampleAt, add);
-    if (before + add < uOccludes)
-        discard; // light still shows through: no depth
-    // A hair behind the face, so the color pass's own fragment still passes GL_LESS (points
-    // have no polygon offset).
-    gl_FragDepth = min(gl_FragCoord.z + uDepthBias, 1.0);
+    if (alpha < 1.0 - 0.5 / 255.0) {
+        // Translucent: the sample occludes once the sum reaches the threshold, but only behind
+        // every fragment that made it up. The walk meets cubes front to back by node, not by
+        // sample, so the fragment that crosses the threshold may lie in front of the others.
+        uint add = uint(min(-log2(1.0 - alpha) * 65536.0, float(uOccludes)));
+        if (add == 0u || imageLoad(uOpacity, sum).x >= uOccludes)
+            discard; // adds nothing, or the sample already occludes (its depth is written)
+        imageAtomicMax(uOpacity, farthest, floatBitsToUint(depth));
+        memoryBarrierImage(); // whoever sees this fragment's share in the sum sees its depth
+        if (imageAtomicAdd(uOpacity, sum, add) + add < uOccludes)
+            discard; // light still shows through: no depth
+        memoryBarrierImage();
+        depth = max(depth, uintBitsToFloat(imageLoad(uOpacity, farthest).x));
+    }
+    // An opaque face hides what lies behind it whatever came before. A hair behind, so the color
+    // pass's own fragment still passes GL_LESS (points have no polygon offset).
+    gl_FragDepth = min(depth + uDepthBias, 1.0);
 }
 )";
 
