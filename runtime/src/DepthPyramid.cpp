@@ -55,18 +55,41 @@ void DepthPyramid::build(int width, int height, std::span<const float> depth) {
 bool DepthPyramid::mayPass(int x0, int y0, int x1, int y1, float nearest) const {
     if (mLevels.empty())
         return true;
-    x0 = std::clamp(x0, 0, width() - 1);
-    x1 = std::clamp(x1, 0, width() - 1);
-    y0 = std::clamp(y0, 0, height() - 1);
-    y1 = std::clamp(y1, 0, height() - 1);
+    const Rect rect{
+            std::clamp(x0, 0, width() - 1),
+            std::clamp(y0, 0, height() - 1),
+            std::clamp(x1, 0, width() - 1),
+            std::clamp(y1, 0, height() - 1)};
     int level = 0;
-    while (level + 1 < levels() && ((x1 >> level) - (x0 >> level) >= kTexelsPerSide ||
-                                    (y1 >> level) - (y0 >> level) >= kTexelsPerSide))
+    while (level + 1 < levels() && ((rect.x1 >> level) - (rect.x0 >> level) >= kTexelsPerSide ||
+                                    (rect.y1 >> level) - (rect.y0 >> level) >= kTexelsPerSide))
         ++level;
+    const int finest = std::max(0, level - kRefineLevels);
     // Texel t of level l covers the pixels [t * 2^l, (t + 1) * 2^l): the rectangle's texels.
-    for (int y = y0 >> level; y <= y1 >> level; ++y)
-        for (int x = x0 >> level; x <= x1 >> level; ++x)
-            if (nearest <= at(level, x, y) + kDepthSlack)
+    for (int y = rect.y0 >> level; y <= rect.y1 >> level; ++y)
+        for (int x = rect.x0 >> level; x <= rect.x1 >> level; ++x)
+            if (passesWithin(level, x, y, rect, nearest, finest))
+                return true;
+    return false;
+}
+
+bool DepthPyramid::passesWithin(
+        int level, int x, int y, const Rect& rect, float nearest, int finest) const {
+    if (nearest > at(level, x, y) + kDepthSlack)
+        return false; // hidden over all this texel covers
+    if (level == finest)
+        return true;
+    // A coarse texel also covers pixels outside the rectangle (past an occluder's edge, say):
+    // its quarters that meet the rectangle decide.
+    const int below = level - 1;
+    const auto index = static_cast<std::size_t>(below);
+    for (int cy = std::max(2 * y, rect.y0 >> below);
+         cy <= std::min({2 * y + 1, rect.y1 >> below, mHeights[index] - 1});
+         ++cy)
+        for (int cx = std::max(2 * x, rect.x0 >> below);
+             cx <= std::min({2 * x + 1, rect.x1 >> below, mWidths[index] - 1});
+             ++cx)
+            if (passesWithin(below, cx, cy, rect, nearest, finest))
                 return true;
     return false;
 }

@@ -38,13 +38,21 @@ public:
     /**
      * Whether something at depth `nearest` over the pixels [x0, x1] x [y0, y1] (inclusive,
      * clamped to the image) could pass a <= depth test: read at the coarsest level where the
-     * rectangle spans at most kTexelsPerSide texels a side.
+     * rectangle spans at most kTexelsPerSide texels a side, and where a texel there may pass,
+     * at the quarters of it that meet the rectangle, down to kRefineLevels levels finer.
      */
     bool mayPass(int x0, int y0, int x1, int y1, float nearest) const;
 
     static constexpr int kTexelsPerSide = 4;
+    /** At most 2^4 = 16 times finer than the first level read: 64 x 64 texels a rectangle. */
+    static constexpr int kRefineLevels = 4;
 
 private:
+    struct Rect {
+        int x0, y0, x1, y1; ///< pixels, inclusive
+    };
+    bool passesWithin(int level, int x, int y, const Rect& rect, float nearest, int finest) const;
+
     std::vector<std::vector<float>> mLevels;
     std::vector<int> mWidths;
     std::vector<int> mHeights;

@@ -51,6 +51,21 @@ TEST(DepthPyramidTest, EveryLevelIsTheFarthestOfWhatItCovers) {
     }
 }
 
+TEST(DepthPyramidTest, ACoarseTexelReachingPastTheOccluderDoesNotKeepABoxVisible) {
+    // Near everywhere but the top row. The rectangle stops 7 rows short of it, but the 16-pixel
+    // texels of the level it is first read at reach it: their quarters inside decide.
+    constexpr int kWidth = 64;
+    constexpr int kHeight = 48;
+    std::vector<float> depth(kWidth * kHeight, 0.2f);
+    for (int x = 0; x < kWidth; ++x)
+        depth[static_cast<std::size_t>((kHeight - 1) * kWidth + x)] = 1.0f;
+    DepthPyramid pyramid;
+    pyramid.build(kWidth, kHeight, depth);
+    EXPECT_FALSE(pyramid.mayPass(10, 5, 50, 40, 0.5f));
+    EXPECT_TRUE(pyramid.mayPass(10, 5, 50, kHeight - 1, 0.5f)) << "reaches the far row";
+    EXPECT_TRUE(pyramid.mayPass(10, 5, 50, 40, 0.1f)) << "in front of the near surface";
+}
+
 /** A 64 x 48 view down -z with a wall of depth `wall` over the pixels [x0, x1) x all. */
 struct WallView {
     glm::mat4 viewProjection =
