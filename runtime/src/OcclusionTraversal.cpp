@@ -203,7 +203,11 @@ struct OcclusionTraversal::Impl {
     void rememberSlots();
     /** The late answers into the history; old entries dropped. */
     void finishFrame();
-    bool budgetLeft() const { return stats->occlusionQueries < frame->occlusion.queryBudget; }
+    bool budgetLeft() const {
+        return stats->occlusionQueries + lateWaiting.size() < frame->occlusion.queryBudget;
+    }
+    /** Issues the late tests waiting for the last flush. */
+    void issueLate();
     QueryTicket issue(std::span<const OcclusionBox> boxes);
     /** The queue's order: a max-heap on this is a min-heap on distance. */
     static bool farther(const Entry& a, const Entry& b) { return a.distance > b.distance; }
@@ -234,6 +238,10 @@ struct OcclusionTraversal::Impl {
     std::vector<Tested> tested;  ///< in a test (Query ranges point here)
     std::deque<Query> pending;
     std::vector<LateQuery> late;
+    /** Late tests not yet issued: they go after the next flush, so that they see what was met
+     *  in front of them (a batch holds up to hundreds of thousands of occluder cubes). Waiting
+     *  for the flush rather than forcing one keeps the draw order, and so the depth ties. */
+    std::vector<std::pair<OcclusionBox, NodeKey>> lateWaiting;
     std::vector<detail::PayloadRun> runs;
     struct ChildRecord {
         storage::NodeRecord record;
@@ -243,6 +251,9 @@ struct OcclusionTraversal::Impl {
     bool cubesSeen = false;            ///< pass 1 met a node drawn as its cube: pass 2 has work
     Status sinkStatus;                 ///< the first error the renderer reported this frame
     std::uint32_t currentSlot = kNone; ///< the slotted node whose subtree pass 1 is expanding
+    /** Children met that will not be tested on their own (cubes, subtrees too small to test):
+     *  a count, so refine() can tell whether a node's children were among them. */
+    std::uint64_t untestedMet = 0;
     std::vector<OcclusionBox> boxes;
 };
 
@@ -295,6 +306,7 @@ Status OcclusionTraversal::Impl::traverse(
     tested.clear();
     pending.clear();
     late.clear();
+    lateWaiting.clear();
     ++batchNumber;
 
     // Pass 1: opaque geometry, front to back, with occlusion tests.
@@ -343,6 +355,7 @@ Status OcclusionTraversal::Impl::traverse(
             issueQueued();
     }
     flush();
+    issueLate();
 
     rememberSlots();
     // Pass 2: the cubes, back to front, skipping what pass 1 found hidden or walked cube-free.
@@ -410,6 +423,7 @@ void OcclusionTraversal::Impl::flush() {
     list.clear();
     ++batchNumber;
     depthWritten = true;
+    issueLate();
 }
 
 void OcclusionTraversal::Impl::pushChild(
@@ -431,11 +445,14 @@ void OcclusionTraversal::Impl::pushChild(
         currentSlot = parent;
         sawCube(record, transform);
         markVisible(parent);
+        ++untestedMet;
         return;
     }
     const float distance = t.metric.nearestDistance(
             toVec3(record.boundsMin), toVec3(record.boundsMax), t.localEye);
     queue.push_back({record, ref, distance, projected, transform, parent, depth});
+    if (!worthTesting(queue.back()))
+        ++untestedMet; // drawn whole when it leaves the queue
     std::push_heap(queue.begin(), queue.end(), farther);
 }
 
@@ -689,8 +706,16 @@ void OcclusionTraversal::Impl::testLate(const Entry& entry, std::uint32_t slot) 
     OcclusionBox box;
     if (!testable(entry, box))
         return;
+    lateWaiting.emplace_back(box, slots[slot].key);
+}
+
+void OcclusionTraversal::Impl::issueLate() {
+    if (lateWaiting.empty())
+        return;
     const auto start = std::chrono::steady_clock::now();
-    late.push_back({issue({&box, 1}), slots[slot].key});
+    for (const auto& [box, key] : lateWaiting)
+        late.push_back({issue({&box, 1}), key});
+    lateWaiting.clear();
     stats->occlusionMs += millisecondsSince(start);
 }
 
@@ -775,12 +800,16 @@ void OcclusionTraversal::Impl::refine(const Entry& entry, std::uint32_t slot, fl
         std::uint32_t transform = 0;
         storage::NodeRef rootRef{};
         storage::NodeRecord root{};
+        const std::uint64_t untestedBefore = untestedMet;
         if (enterInstance(node, entry.transform, priority, transform, rootRef, root))
             pushChild(root, rootRef, transform, slot, entry.depth + 1);
         else
             markVisible(slot);
+        if (untestedMet != untestedBefore)
+            testLate(entry, slot); // a leaf of the tests (see below)
         return;
     }
+    const std::uint64_t untestedBefore = untestedMet;
     const Expanded expanded = expandCell(
             node,
             entry.transform,
@@ -790,7 +819,10 @@ void OcclusionTraversal::Impl::refine(const Entry& entry, std::uint32_t slot, fl
             });
     if (expanded != Expanded::NothingOwn)
         markVisible(slot); // its geometry, or its cube, is drawn
-    if (expanded != Expanded::NothingOwn || node.childCount == 0)
+    // CHC's leaves, tested late to learn whether they went out of sight: the nodes that draw
+    // something themselves, and those with a child that is never tested on its own (a cube,
+    // a subtree drawn whole) — else a far field that became hidden would stay visible for good.
+    if (expanded != Expanded::NothingOwn || node.childCount == 0 || untestedMet != untestedBefore)
         testLate(entry, slot);
 }
 
