@@ -14,6 +14,7 @@
 #include <cmath>
 #include <deque>
 #include <limits>
+#include <optional>
 #include <unordered_map>
 
 namespace ff::runtime {
@@ -34,6 +35,21 @@ constexpr std::uint32_t kHistoryFrames = 64;
 /** Nodes hidden at this many tests in a row are tested together (CHC++'s multiqueries group
  *  the nodes likely to stay hidden; a group found visible costs a test per node again). */
 constexpr std::uint16_t kStableHiddenTests = 2;
+/** A camera that turned more than this since the last frame, or moved more than this share of
+ *  its distance to the scene's centre (at least a tenth of the scene's diagonal, for an eye near
+ *  the centre), jumped: what was visible there says little here, and drawn untested it would
+ *  stay drawn until its next late test (up to visibleTestInterval frames). The frame after a
+ *  jump starts without history, as the first frame does. An orbit of 120 frames a turn moves
+ *  about 5 % of its radius a frame; a walk, a few percent. */
+constexpr float kJumpDegrees = 30.0f;
+constexpr float kJumpShareOfDistance = 0.25f;
+
+bool jumped(const Camera& from, const Camera& to, const glm::vec3& sceneMin, const glm::vec3& sceneMax) {
+    const glm::vec3 centre = 0.5f * (sceneMin + sceneMax);
+    const float scale = std::max(glm::distance(from.eye, centre), 0.1f * glm::distance(sceneMin, sceneMax));
+    return glm::distance(from.eye, to.eye) > kJumpShareOfDistance * scale ||
+           glm::dot(from.forward, to.forward) < std::cos(glm::radians(kJumpDegrees));
+}
 
 double millisecondsSince(std::chrono::steady_clock::time_point start) {
     return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start)
@@ -216,6 +232,7 @@ struct OcclusionTraversal::Impl {
     detail::NodePages nodePages;
     BackToFrontTraversal cubes; ///< pass 2
     std::unordered_map<NodeKey, History, NodeKeyHash> history;
+    std::optional<Camera> lastCamera; ///< the last frame's (jumped())
     HistoryVisibility historyView;
     FrameOccluded occluded;
     std::vector<Status> failures; ///< both passes' new failures
@@ -284,6 +301,10 @@ Status OcclusionTraversal::Impl::traverse(
     services = &frameServices;
     stats = &frameStats;
     ++frameNumber;
+    const storage::FileHeader& header = scene.header();
+    if (lastCamera && jumped(*lastCamera, frame->camera, toVec3(header.boundsMin), toVec3(header.boundsMax)))
+        history.clear();
+    lastCamera = frame->camera;
     nodePages.beginFrame();
     nodePages.countInto(frameStats);
     failures.clear();
