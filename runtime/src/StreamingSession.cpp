@@ -317,32 +317,71 @@ private:
     Renderer& mRenderer;
 };
 
-/** Draws each batch with only the geometry runs the oracle found visible. The walk is
+/** Draws each batch with only the triangles and cubes the oracle found visible. The walk is
  *  deterministic, so batch k is the first drawing's batch k; one that is not is drawn whole. */
 class VisibleOnlySink final : public IDrawSink {
 public:
-    VisibleOnlySink(Renderer& renderer, const std::vector<std::vector<bool>>& visible)
+    VisibleOnlySink(Renderer& renderer, const std::vector<BatchVisibility>& visible)
         : mRenderer(renderer), mVisible(visible) {}
     Status draw(const DrawList& batch, FrameStats& stats) override {
         const std::size_t k = mNext++;
-        if (k >= mVisible.size() || mVisible[k].size() != batch.geometry.size())
+        std::uint64_t triangles = 0;
+        for (const GeometryDraw& draw : batch.geometry)
+            triangles += draw.triangleCount;
+        if (k >= mVisible.size() || mVisible[k].triangles.size() != triangles ||
+            mVisible[k].cubes.size() != batch.cubes.size())
             return mRenderer.draw(batch, stats);
-        mScratch = batch;
-        std::size_t kept = 0;
-        for (std::size_t i = 0; i < batch.geometry.size(); ++i) {
-            if (mVisible[k][i])
-                mScratch.geometry[kept++] = batch.geometry[i];
-            else
-                stats.trianglesDrawn -= batch.geometry[i].triangleCount; // counted by the walk
+        const BatchVisibility& shows = mVisible[k];
+        mScratch.transforms = batch.transforms;
+        mScratch.localEyes = batch.localEyes;
+        mScratch.cubesAsPoints = batch.cubesAsPoints;
+        mScratch.cubesOcclude = batch.cubesOcclude;
+        // Each run cut to the stretches of triangles that show (the walk counted them all).
+        mScratch.geometry.clear();
+        std::uint64_t bit = 0;
+        for (const GeometryDraw& draw : batch.geometry) {
+            std::uint32_t t = 0;
+            while (t < draw.triangleCount) {
+                for (; t < draw.triangleCount && !shows.triangles[bit + t]; ++t)
+                    --stats.trianglesDrawn;
+                const std::uint32_t first = t;
+                for (; t < draw.triangleCount && shows.triangles[bit + t]; ++t) {
+                }
+                if (t > first)
+                    mScratch.geometry.push_back(
+                            {draw.page, draw.payload, draw.firstTriangle + first, t - first, draw.transform});
+            }
+            bit += draw.triangleCount;
         }
-        stats.geometryDraws -= batch.geometry.size() - kept;
-        mScratch.geometry.resize(kept);
+        stats.geometryDraws = stats.geometryDraws - batch.geometry.size() + mScratch.geometry.size();
+        mScratch.cubes.clear();
+        for (std::size_t c = 0; c < batch.cubes.size(); ++c) {
+            if (shows.cubes[c]) {
+                mScratch.cubes.push_back(batch.cubes[c]);
+                continue;
+            }
+            --stats.cubesDrawn;
+            stats.cubeFacesDrawn -= facesTowardEye(batch.cubes[c], batch.localEyes[batch.cubes[c].transform]);
+        }
         return mRenderer.draw(mScratch, stats);
     }
 
 private:
+    /** The faces the walk counted for a cube (cube_faces_drawn): toward the eye, alpha > 0. */
+    static std::uint64_t facesTowardEye(const CubeDraw& cube, const glm::vec3& eye) {
+        std::uint64_t faces = 0;
+        for (int axis = 0; axis < 3; ++axis) {
+            const auto minus = static_cast<std::size_t>(2 * axis);
+            if (eye[axis] < cube.boxMin[axis] && cube.faces[minus][3] > 0)
+                ++faces;
+            if (eye[axis] > cube.boxMax[axis] && cube.faces[minus + 1][3] > 0)
+                ++faces;
+        }
+        return faces;
+    }
+
     Renderer& mRenderer;
-    const std::vector<std::vector<bool>>& mVisible;
+    const std::vector<BatchVisibility>& mVisible;
     std::size_t mNext = 0;
     DrawList mScratch;
 };
@@ -355,8 +394,8 @@ Result<Frame> StreamingSession::renderOracle(const FrameContext& context) {
         return Status(ErrorCode::InvalidArgument, "the occlusion oracle needs every page mapped (no --cache-mb)");
     FrameContext plain = context;
     plain.occlusion.enabled = false;
-    // What shows: the frame drawn whole, then each geometry run asked about.
-    std::vector<std::vector<bool>> visible;
+    // What shows: the frame drawn whole, then each triangle and cube asked about.
+    std::vector<BatchVisibility> visible;
     {
         FrameStats ignored;
         KeepingSink keeping(*s.renderer);
@@ -367,7 +406,7 @@ Result<Frame> StreamingSession::renderOracle(const FrameContext& context) {
         s.sinkOverride = nullptr;
         FF_RETURN_IF_ERROR(drawn);
         for (const DrawList& batch : keeping.batches)
-            visible.push_back(s.renderer->visibleRuns(batch));
+            visible.push_back(s.renderer->visibleParts(batch));
     }
     VisibleOnlySink visibleOnly(*s.renderer, visible);
     Frame result;

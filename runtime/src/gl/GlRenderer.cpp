@@ -82,6 +82,10 @@ struct Renderer::Impl {
     GLuint cubePointProgram = 0;
     GLuint cubeOccluderProgram = 0;      ///< cubes as occluders (OcclusionOptions::cubesOcclude)
     GLuint cubePointOccluderProgram = 0; ///< the same for cubes drawn as points
+    /** The oracle's (visibleParts): made by its first call, as only benchmarks ask. */
+    GLuint visibleTriangleProgram = 0, visibleCubeProgram = 0, visibleCubePointProgram = 0;
+    GLuint visibleBits = 0; ///< their storage buffer: a bit per triangle, then per cube
+    GLsizeiptr visibleBitsCap = 0;
     GLuint geometryVao = 0;
     GLuint cubeVao = 0;
     // The page arena: one slot per resident geometry page.
@@ -158,6 +162,10 @@ Renderer::Impl::~Impl() {
     glDeleteProgram(cubePointProgram);
     glDeleteProgram(cubeOccluderProgram);
     glDeleteProgram(cubePointOccluderProgram);
+    glDeleteProgram(visibleTriangleProgram);
+    glDeleteProgram(visibleCubeProgram);
+    glDeleteProgram(visibleCubePointProgram);
+    glDeleteBuffers(1, &visibleBits);
     glDeleteFramebuffers(1, &framebuffer);
     glDeleteTextures(1, &colorTexture);
     glDeleteTextures(1, &opacityTexture);
@@ -502,44 +510,97 @@ Status Renderer::draw(const DrawList& batch, FrameStats& stats) {
     return Status::ok();
 }
 
-std::vector<bool> Renderer::visibleRuns(const DrawList& batch) {
+BatchVisibility Renderer::visibleParts(const DrawList& batch) {
     Impl& s = *mImpl;
-    std::vector<bool> visible(batch.geometry.size(), true);
+    BatchVisibility visible;
+    std::uint64_t triangles = 0;
+    for (const GeometryDraw& draw : batch.geometry)
+        triangles += draw.triangleCount;
+    visible.triangles.assign(triangles, true);
+    visible.cubes.assign(batch.cubes.size(), true);
+    if (!s.visibleTriangleProgram) {
+        auto program = linkGlProgram({gl::kGeometryVertexShader}, gl::kVisibleTriangleFragmentShader);
+        auto cube = linkGlProgram({gl::kCubeShaderInputs, gl::kCubeVertexShader}, gl::kVisibleCubeFragmentShader);
+        auto point = linkGlProgram({gl::kCubeShaderInputs, gl::kCubePointVertexShader}, gl::kVisibleCubeFragmentShader);
+        if (!program || !cube || !point)
+            return visible; // unknown: everything shows
+        s.visibleTriangleProgram = *program;
+        s.visibleCubeProgram = *cube;
+        s.visibleCubePointProgram = *point;
+        glGenBuffers(1, &s.visibleBits);
+    }
+    const std::uint64_t bits = triangles + batch.cubes.size();
+    const auto words = static_cast<GLsizeiptr>((bits + 31) / 32);
+    if (words == 0)
+        return visible;
+    ensureCapacity(s.visibleBits, s.visibleBitsCap, words * static_cast<GLsizeiptr>(sizeof(GLuint)));
+    const GLuint zero = 0;
+    glClearNamedBufferSubData(s.visibleBits, GL_R32UI, 0, words * static_cast<GLsizeiptr>(sizeof(GLuint)), GL_RED_INTEGER,
+                              GL_UNSIGNED_INT, &zero);
+    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 3, s.visibleBits);
+
     glBindFramebuffer(GL_FRAMEBUFFER, s.framebuffer); // the finished frame's depth
     glViewport(0, 0, s.frameWidth * s.frameSupersample, s.frameHeight * s.frameSupersample);
     s.ringSlot = (s.ringSlot + 1) % Impl::kBatchBufferSets;
     s.uploadTransforms(batch);
-    glUseProgram(s.geometryProgram);
-    glUniformMatrix4fv(glGetUniformLocation(s.geometryProgram, "uViewProjection"), 1, GL_FALSE,
-                       glm::value_ptr(s.frameViewProjection));
-    glBindVertexArray(s.geometryVao);
     glColorMask(GL_FALSE, GL_FALSE, GL_FALSE, GL_FALSE);
     glDepthMask(GL_FALSE);
+    glUseProgram(s.visibleTriangleProgram);
+    glUniformMatrix4fv(glGetUniformLocation(s.visibleTriangleProgram, "uViewProjection"), 1, GL_FALSE,
+                       glm::value_ptr(s.frameViewProjection));
+    const GLint firstBit = glGetUniformLocation(s.visibleTriangleProgram, "uFirstBit");
+    glBindVertexArray(s.geometryVao);
     glDepthFunc(GL_EQUAL);
-    std::vector<GLuint> queries(batch.geometry.size(), 0);
-    glGenQueries(static_cast<GLsizei>(queries.size()), queries.data());
+    std::vector<bool> resident(batch.geometry.size(), false);
+    std::uint64_t bit = 0;
     for (std::size_t i = 0; i < batch.geometry.size(); ++i) {
         const GeometryDraw& draw = batch.geometry[i];
         const auto slot = s.slotOfPage.find(draw.page);
-        if (slot == s.slotOfPage.end())
-            continue;
-        glBeginQuery(GL_ANY_SAMPLES_PASSED, queries[i]);
-        glDrawArraysInstancedBaseInstance(
-                GL_TRIANGLES,
-                static_cast<GLint>(slot->second * s.verticesPerSlot + draw.firstTriangle * 3),
-                static_cast<GLsizei>(draw.triangleCount * 3),
-                1,
-                draw.transform);
-        glEndQuery(GL_ANY_SAMPLES_PASSED);
+        if (slot != s.slotOfPage.end()) {
+            resident[i] = true;
+            glUniform1ui(firstBit, static_cast<GLuint>(bit));
+            glDrawArraysInstancedBaseInstance(
+                    GL_TRIANGLES,
+                    static_cast<GLint>(slot->second * s.verticesPerSlot + draw.firstTriangle * 3),
+                    static_cast<GLsizei>(draw.triangleCount * 3),
+                    1,
+                    draw.transform);
+        }
+        bit += draw.triangleCount;
     }
+    if (!batch.cubes.empty()) {
+        const auto bytes = static_cast<GLsizeiptr>(batch.cubes.size() * sizeof(CubeDraw));
+        Impl::BatchBuffers& set = s.current();
+        ensureCapacity(set.cubes, set.cubesCap, bytes);
+        bufferSubData(set.cubes, 0, bytes, batch.cubes.data());
+        const GLuint program = batch.cubesAsPoints ? s.visibleCubePointProgram : s.visibleCubeProgram;
+        glUseProgram(program);
+        glUniformMatrix4fv(glGetUniformLocation(program, "uViewProjection"), 1, GL_FALSE,
+                           glm::value_ptr(s.frameViewProjection));
+        glUniform1ui(glGetUniformLocation(program, "uFirstBit"), static_cast<GLuint>(triangles));
+        glBindVertexArray(s.cubeVao);
+        glBindVertexBuffer(0, set.cubes, 0, sizeof(CubeDraw));
+        glDepthFunc(GL_LESS);
+        if (batch.cubesAsPoints) {
+            glUniform1f(glGetUniformLocation(program, "uPixelScale"), s.framePixelScale);
+            glEnable(GL_PROGRAM_POINT_SIZE);
+            glDrawArraysInstanced(GL_POINTS, 0, 1, static_cast<GLsizei>(batch.cubes.size()));
+            glDisable(GL_PROGRAM_POINT_SIZE);
+        } else {
+            glDrawArraysInstanced(GL_TRIANGLES, 0, 18, static_cast<GLsizei>(batch.cubes.size()));
+        }
+    }
+    glMemoryBarrier(GL_BUFFER_UPDATE_BARRIER_BIT);
+    std::vector<GLuint> shown(static_cast<std::size_t>(words));
+    glGetNamedBufferSubData(s.visibleBits, 0, words * static_cast<GLsizeiptr>(sizeof(GLuint)), shown.data());
+    const auto isSet = [&](std::uint64_t b) { return (shown[b >> 5] >> (b & 31u)) & 1u; };
+    bit = 0;
     for (std::size_t i = 0; i < batch.geometry.size(); ++i) {
-        if (!s.slotOfPage.contains(batch.geometry[i].page))
-            continue;
-        GLuint passed = 0;
-        glGetQueryObjectuiv(queries[i], GL_QUERY_RESULT, &passed);
-        visible[i] = passed != 0;
+        for (std::uint32_t t = 0; t < batch.geometry[i].triangleCount; ++t, ++bit)
+            visible.triangles[bit] = !resident[i] || isSet(bit);
     }
-    glDeleteQueries(static_cast<GLsizei>(queries.size()), queries.data());
+    for (std::size_t c = 0; c < batch.cubes.size(); ++c)
+        visible.cubes[c] = isSet(triangles + c);
     glBindFramebuffer(GL_FRAMEBUFFER, 0);
     glDepthFunc(GL_LESS);
     glDepthMask(GL_TRUE);

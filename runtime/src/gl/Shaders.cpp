@@ -12,6 +12,7 @@ layout(location = 3) in vec4 aFaces[6];    // premultiplied linear RGBA8, -X +X 
 layout(std430, binding = 0) readonly buffer Transforms { mat4 transforms[]; };
 layout(std430, binding = 2) readonly buffer LocalEyes { vec4 localEyes[]; };
 uniform mat4 uViewProjection;
+flat out uint vCube; // which cube of the batch (kVisibleCubeFragmentShader)
 )";
 
 const char* const kGeometryVertexShader = R"(#version 450 core
@@ -64,6 +65,7 @@ const ivec2 kCorners[6] = ivec2[6](ivec2(0, 0), ivec2(1, 0), ivec2(1, 1), ivec2(
 // 18 vertices per cube: a box shows at most one face per axis, the one on the eye's side, and
 // none on an axis whose slab holds the eye.
 void main() {
+    vCube = uint(gl_InstanceID);
     int axis = gl_VertexID / 6;
     int u = (axis + 1) % 3;
     int v = (axis + 2) % 3;
@@ -92,6 +94,7 @@ out vec4 vColor;
 // by how much of the point the box really covers, so coverage stays right on average instead of
 // depending on which pixel centres a tiny quad happens to hit.
 void main() {
+    vCube = uint(gl_InstanceID);
     vec3 center = 0.5 * (aBoxMin + aBoxMax);
     vec3 extent = aBoxMax - aBoxMin;
     vec3 toEye = localEyes[aTransform].xyz - center;
@@ -152,6 +155,33 @@ void main() {
     // An opaque face hides what lies behind it whatever came before. A hair behind, so the color
     // pass's own fragment still passes GL_LESS (points have no polygon offset).
     gl_FragDepth = min(depth + uDepthBias, 1.0);
+}
+)";
+
+// The oracle's pass (Renderer::visibleParts): a fragment that passes the depth test sets its
+// triangle's or cube's bit. The test runs before the shader (early_fragment_tests), or every
+// fragment would set its bit.
+const char* const kVisibleTriangleFragmentShader = R"(#version 450 core
+layout(early_fragment_tests) in;
+layout(std430, binding = 3) buffer Visible { uint visibleBits[]; };
+uniform uint uFirstBit; // the draw's first triangle's bit
+void main() {
+    uint bit = uFirstBit + uint(gl_PrimitiveID);
+    atomicOr(visibleBits[bit >> 5], 1u << (bit & 31u));
+}
+)";
+
+const char* const kVisibleCubeFragmentShader = R"(#version 450 core
+layout(early_fragment_tests) in;
+in vec4 vColor;
+flat in uint vCube;
+layout(std430, binding = 3) buffer Visible { uint visibleBits[]; };
+uniform uint uFirstBit; // the batch's first cube's bit
+void main() {
+    if (vColor.a <= 0.0)
+        return; // adds nothing to the image
+    uint bit = uFirstBit + vCube;
+    atomicOr(visibleBits[bit >> 5], 1u << (bit & 31u));
 }
 )";
 

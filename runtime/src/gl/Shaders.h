@@ -16,5 +16,9 @@ extern const char* const kCubePointVertexShader;
 /** Either cube vertex shader's fragments as occluders: depth only, where the opacity
  *  accumulated over the sample (an r32ui image) reaches the frame's threshold. */
 extern const char* const kCubeOccluderFragmentShader;
+/** The oracle's: with the geometry vertex shader, sets a bit per triangle that shows (the
+ *  depth test at ==); with either cube vertex shader, a bit per cube that shows (at <). */
+extern const char* const kVisibleTriangleFragmentShader;
+extern const char* const kVisibleCubeFragmentShader;
 
 } // namespace ff::runtime::gl

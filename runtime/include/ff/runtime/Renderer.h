@@ -24,6 +24,13 @@ struct RendererOptions {
     glm::vec3 backgroundLinear{0.70f, 0.75f, 0.83f};
 };
 
+/** What of one batch shows in a finished frame (Renderer::visibleParts, the oracle's answer). */
+struct BatchVisibility {
+    /** A flag per triangle: the batch's geometry draws' triangles, one draw after another. */
+    std::vector<bool> triangles;
+    std::vector<bool> cubes; ///< a flag per cube of the batch
+};
+
 /** Where a frame goes. */
 enum class FrameOutput {
     Image,  ///< the renderer's own target, read back and resolved (coverage kept as alpha)
@@ -88,11 +95,14 @@ public:
 
     /**
      * The oracle's question, asked after a frame's every batch was drawn: which of `batch`'s
-     * geometry runs show at least one sample in the finished depth buffer (each run drawn again
-     * inside an occlusion query with the depth test at ==, nothing written; the same shader and
-     * inputs give the same depths). A run whose page is no longer on the GPU counts as visible.
+     * triangles and cubes show at least one sample of the finished frame. The batch is drawn
+     * again, nothing written but a bit per primitive whose fragment passes the depth test:
+     * at == for triangles (the same shader and inputs give the same depths; surfaces tied in
+     * depth both count), at < for cubes (they write no depth: one shows wherever it lies in
+     * front of the opaque surface, and a face of alpha 0 does not count). A triangle whose page
+     * is no longer on the GPU counts as visible.
      */
-    [[nodiscard]] std::vector<bool> visibleRuns(const DrawList& batch);
+    [[nodiscard]] BatchVisibility visibleParts(const DrawList& batch);
 
     /** Bytes of the GPU page arena holding geometry pages now (at most the GPU budget). */
     [[nodiscard]] std::uint64_t residentBytes() const noexcept;

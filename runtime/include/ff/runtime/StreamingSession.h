@@ -99,9 +99,9 @@ public:
     [[nodiscard]] Result<FrameStats> present(const FrameContext& frame);
     /**
      * The occlusion oracle (benchmarks): the frustum-culled frame drawn once, untimed, to learn
-     * which geometry runs show at least one sample (Renderer::visibleRuns), then drawn again with
-     * exactly those and the same cubes. The frame returned, its stats and telemetry are the
-     * second drawing's: what exact occlusion culling would cost, with the knowledge for free.
+     * which triangles and cubes show at least one sample (Renderer::visibleParts), then drawn
+     * again with exactly those. The frame returned, its stats and telemetry are the second
+     * drawing's: what exact occlusion culling would cost, with the knowledge for free.
      * Needs every page mapped (a session without a cache). Errors: InvalidArgument with a cache.
      */
     [[nodiscard]] Result<Frame> renderOracle(const FrameContext& frame);
