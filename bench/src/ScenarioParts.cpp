@@ -152,12 +152,13 @@ Status setMethodKey(MethodSpec& method, const std::string& key, const nlohmann::
         method.selection.maxCubeAnisotropy = value.get<float>();
         return Status::ok();
     }
-    if (key == "occlusion" || key == "coherence" || key == "oracle") {
+    if (key == "occlusion" || key == "coherence" || key == "oracle" || key == "cube_occluders") {
         if (!value.is_boolean())
             return Status(ErrorCode::InvalidArgument, key + ": expected true or false, got " + value.dump());
-        bool& flag = key == "occlusion" ? method.occlusion.enabled
+        bool& flag = key == "occlusion"   ? method.occlusion.enabled
                      : key == "coherence" ? method.occlusion.coherent
-                                          : method.oracle;
+                     : key == "oracle"    ? method.oracle
+                                          : method.occlusion.cubesOcclude;
         flag = value.get<bool>();
         return Status::ok();
     }
@@ -170,11 +171,20 @@ Status setMethodKey(MethodSpec& method, const std::string& key, const nlohmann::
         method.occlusion.backend = *backend;
         return Status::ok();
     }
+    if (key == "opacity_threshold") {
+        if (!value.is_number() || !(value.get<double>() >= 0.0 && value.get<double>() <= 0.5))
+            return Status(
+                    ErrorCode::InvalidArgument,
+                    "opacity_threshold: expected a number in [0, 0.5] (the light an occluding pixel may let through), got " +
+                            value.dump());
+        method.occlusion.opacityThreshold = value.get<float>();
+        return Status::ok();
+    }
     return Status(
             ErrorCode::InvalidArgument,
             "\"" + key +
                     "\" is not a method key a sweep can vary (eps, cube_draw, cube_anisotropy, occlusion, "
-                    "coherence, oracle, occlusion_backend)");
+                    "coherence, oracle, occlusion_backend, cube_occluders, opacity_threshold)");
 }
 
 std::vector<MethodSpec> readMethods(ScenarioReader& reader) {
