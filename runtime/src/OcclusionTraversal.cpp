@@ -162,9 +162,10 @@ struct OcclusionTraversal::Impl {
     Status traverse(const FrameContext& frame, TraversalServices services, FrameStats& stats);
     void process(const Entry& entry);
     /** Draws a node found (or taken as) visible: its cube is pass 2's, a refined node's
-     *  geometry is drawn and its children queued. */
-    void draw(const Tested& node);
-    void refine(const Entry& entry, std::uint32_t slot, float projected);
+     *  geometry is drawn and its children queued. `answered`: this frame's test found it
+     *  visible, so the next frame knows as much and it needs no late test. */
+    void draw(const Tested& node, bool answered = false);
+    void refine(const Entry& entry, std::uint32_t slot, float projected, bool answered);
     enum class Expanded { Deferred, NothingOwn, DrewGeometry };
     /** Expands a visible cell: draws its own geometry and hands each child to `child`. Deferred
      *  (nothing done) when its pages are not all resident or a child is unreadable: its cube
@@ -219,10 +220,8 @@ struct OcclusionTraversal::Impl {
     void rememberSlots();
     /** The late answers into the history; old entries dropped. */
     void finishFrame();
-    bool budgetLeft() const {
-        return stats->occlusionQueries + lateWaiting.size() < frame->occlusion.queryBudget;
-    }
-    /** Issues the late tests waiting for the last flush. */
+    bool budgetLeft() const { return stats->occlusionQueries < frame->occlusion.queryBudget; }
+    /** Issues the late tests, after pass 1, with what is left of the frame's test budget. */
     void issueLate();
     QueryTicket issue(std::span<const OcclusionBox> boxes);
     /** The queue's order: a max-heap on this is a min-heap on distance. */
@@ -255,9 +254,11 @@ struct OcclusionTraversal::Impl {
     std::vector<Tested> tested;  ///< in a test (Query ranges point here)
     std::deque<Query> pending;
     std::vector<LateQuery> late;
-    /** Late tests not yet issued: they go after the next flush, so that they see what was met
-     *  in front of them (a batch holds up to hundreds of thousands of occluder cubes). Waiting
-     *  for the flush rather than forcing one keeps the draw order, and so the depth ties. */
+    /** Late tests not yet issued. They go after pass 1, against all of its depth (issued at
+     *  once, they saw only the batches flushed before them, and a batch holds up to hundreds of
+     *  thousands of occluder cubes), and only with the budget this frame's own tests left: they
+     *  are for the next frame, and one taken from a node still waiting for its answer has it
+     *  drawn untested now (the 100 k-atom molecule's cold frame spends the whole budget). */
     std::vector<std::pair<OcclusionBox, NodeKey>> lateWaiting;
     std::vector<detail::PayloadRun> runs;
     struct ChildRecord {
@@ -444,7 +445,6 @@ void OcclusionTraversal::Impl::flush() {
     list.clear();
     ++batchNumber;
     depthWritten = true;
-    issueLate();
 }
 
 void OcclusionTraversal::Impl::pushChild(
@@ -534,9 +534,9 @@ void OcclusionTraversal::Impl::process(const Entry& entry) {
         queueForTest(visit);
 }
 
-void OcclusionTraversal::Impl::draw(const Tested& node) {
+void OcclusionTraversal::Impl::draw(const Tested& node, bool answered) {
     currentSlot = node.slot;
-    refine(node.entry, node.slot, node.projected);
+    refine(node.entry, node.slot, node.projected, answered);
 }
 
 bool OcclusionTraversal::Impl::testable(const Entry& entry, OcclusionBox& box) const {
@@ -705,7 +705,7 @@ void OcclusionTraversal::Impl::answer(const Query& query, bool visible) {
         if (visible) {
             h.hidden = false;
             h.hiddenTests = 0;
-            draw(node);
+            draw(node, !frame->occlusion.ignoreAnswers);
         } else {
             h.hidden = true;
             h.hiddenTests = static_cast<std::uint16_t>(
@@ -734,8 +734,11 @@ void OcclusionTraversal::Impl::issueLate() {
     if (lateWaiting.empty())
         return;
     const auto start = std::chrono::steady_clock::now();
-    for (const auto& [box, key] : lateWaiting)
+    for (const auto& [box, key] : lateWaiting) {
+        if (!budgetLeft())
+            break; // the rest keep last frame's answer
         late.push_back({issue({&box, 1}), key});
+    }
     lateWaiting.clear();
     stats->occlusionMs += millisecondsSince(start);
 }
@@ -813,7 +816,7 @@ OcclusionTraversal::Impl::Expanded OcclusionTraversal::Impl::expandCell(
     return drew ? Expanded::DrewGeometry : Expanded::NothingOwn;
 }
 
-void OcclusionTraversal::Impl::refine(const Entry& entry, std::uint32_t slot, float projected) {
+void OcclusionTraversal::Impl::refine(const Entry& entry, std::uint32_t slot, float projected, bool answered) {
     const storage::NodeRecord& node = entry.record;
     const float priority =
             std::min(projected, detail::kTopPriority) * frame->selection.priorityScale;
@@ -826,7 +829,7 @@ void OcclusionTraversal::Impl::refine(const Entry& entry, std::uint32_t slot, fl
             pushChild(root, rootRef, transform, slot, entry.depth + 1);
         else
             markVisible(slot);
-        if (untestedMet != untestedBefore)
+        if (!answered && untestedMet != untestedBefore)
             testLate(entry, slot); // a leaf of the tests (see below)
         return;
     }
@@ -840,10 +843,12 @@ void OcclusionTraversal::Impl::refine(const Entry& entry, std::uint32_t slot, fl
             });
     if (expanded != Expanded::NothingOwn)
         markVisible(slot); // its geometry, or its cube, is drawn
-    // CHC's leaves, tested late to learn whether they went out of sight: the nodes that draw
-    // something themselves, and those with a child that is never tested on its own (a cube,
-    // a subtree drawn whole) — else a far field that became hidden would stay visible for good.
-    if (expanded != Expanded::NothingOwn || node.childCount == 0 || untestedMet != untestedBefore)
+    // CHC's leaves, drawn without a test this frame, are tested late to learn whether they went
+    // out of sight: the nodes that draw something themselves, and those with a child that is
+    // never tested on its own (a cube, a subtree drawn whole) — else a far field that became
+    // hidden would stay visible for good. One this frame's test found visible needs none (and
+    // would take the frame's test budget from the nodes still waiting for theirs).
+    if (!answered && (expanded != Expanded::NothingOwn || node.childCount == 0 || untestedMet != untestedBefore))
         testLate(entry, slot);
 }
 
