@@ -318,7 +318,10 @@ private:
 };
 
 /** Draws each batch with only the triangles and cubes the oracle found visible. The walk is
- *  deterministic, so batch k is the first drawing's batch k; one that is not is drawn whole. */
+ *  deterministic, so batch k is the first drawing's batch k; one that is not is drawn whole.
+ *  What it leaves out is counted here and taken off the frame's stats by countInto(): a walk
+ *  may hand its batches another stats object (the cubes of a spilled frame are counted once,
+ *  by its geometry pass). */
 class VisibleOnlySink final : public IDrawSink {
 public:
     VisibleOnlySink(Renderer& renderer, const std::vector<BatchVisibility>& visible)
@@ -343,7 +346,7 @@ public:
             std::uint32_t t = 0;
             while (t < draw.triangleCount) {
                 for (; t < draw.triangleCount && !shows.triangles[bit + t]; ++t)
-                    --stats.trianglesDrawn;
+                    ++mTrianglesLeft;
                 const std::uint32_t first = t;
                 for (; t < draw.triangleCount && shows.triangles[bit + t]; ++t) {
                 }
@@ -353,17 +356,25 @@ public:
             }
             bit += draw.triangleCount;
         }
-        stats.geometryDraws = stats.geometryDraws - batch.geometry.size() + mScratch.geometry.size();
+        mDrawsLeft += static_cast<std::int64_t>(batch.geometry.size()) - static_cast<std::int64_t>(mScratch.geometry.size());
         mScratch.cubes.clear();
         for (std::size_t c = 0; c < batch.cubes.size(); ++c) {
             if (shows.cubes[c]) {
                 mScratch.cubes.push_back(batch.cubes[c]);
                 continue;
             }
-            --stats.cubesDrawn;
-            stats.cubeFacesDrawn -= facesTowardEye(batch.cubes[c], batch.localEyes[batch.cubes[c].transform]);
+            ++mCubesLeft;
+            mFacesLeft += facesTowardEye(batch.cubes[c], batch.localEyes[batch.cubes[c].transform]);
         }
         return mRenderer.draw(mScratch, stats);
+    }
+
+    /** Takes what was left out off the walk's counts. */
+    void countInto(FrameStats& stats) const {
+        stats.trianglesDrawn -= mTrianglesLeft;
+        stats.cubesDrawn -= mCubesLeft;
+        stats.cubeFacesDrawn -= mFacesLeft;
+        stats.geometryDraws = static_cast<std::uint64_t>(static_cast<std::int64_t>(stats.geometryDraws) - mDrawsLeft);
     }
 
 private:
@@ -384,6 +395,8 @@ private:
     const std::vector<BatchVisibility>& mVisible;
     std::size_t mNext = 0;
     DrawList mScratch;
+    std::uint64_t mTrianglesLeft = 0, mCubesLeft = 0, mFacesLeft = 0;
+    std::int64_t mDrawsLeft = 0; ///< draws the walk merged less those the cut runs take (may be < 0)
 };
 
 } // namespace
@@ -397,7 +410,6 @@ Result<Frame> StreamingSession::renderOracle(const FrameContext& context) {
     // What shows: the frame drawn whole, then each triangle and cube asked about.
     std::vector<BatchVisibility> visible;
     {
-        FrameStats ignored;
         KeepingSink keeping(*s.renderer);
         s.sinkOverride = &keeping;
         Frame first;
@@ -412,7 +424,9 @@ Result<Frame> StreamingSession::renderOracle(const FrameContext& context) {
     Frame result;
     s.sinkOverride = &visibleOnly;
     const Status drawn = s.call(plain, result.stats, [&](double& prefetchMs, bool&) {
-        return s.frameToImage(plain, result, prefetchMs);
+        FF_RETURN_IF_ERROR(s.frameToImage(plain, result, prefetchMs));
+        visibleOnly.countInto(result.stats);
+        return Status::ok();
     });
     s.sinkOverride = nullptr;
     FF_RETURN_IF_ERROR(drawn);
