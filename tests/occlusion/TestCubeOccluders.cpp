@@ -2,6 +2,7 @@
 // translucent faces occlude together once the light they let through falls to the threshold,
 // and whatever order they are drawn in, only behind every face that made up that opacity.
 
+#include "OcclusionBoxes.h"
 #include "TestDir.h"
 
 #include <ff/builder/SceneBuilder.h>
@@ -33,16 +34,7 @@ CubeDraw slabAt(float z) {
     return cube;
 }
 
-/** The box [centre - half, centre + half], corners in the order the tester expects. */
-OcclusionBox boxAround(const glm::vec3& centre, float half) {
-    OcclusionBox box;
-    for (int i = 0; i < 8; ++i)
-        box.corners[static_cast<std::size_t>(i)] = centre + half * glm::vec3(
-                                                                           (i & 1) ? 1.0f : -1.0f,
-                                                                           (i & 2) ? 1.0f : -1.0f,
-                                                                           (i & 4) ? 1.0f : -1.0f);
-    return box;
-}
+using test::boxAround;
 
 class CubeOccludersTest : public ::testing::Test {
 protected:

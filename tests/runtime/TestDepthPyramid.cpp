@@ -2,6 +2,7 @@
 // cover every pixel (odd sizes included), and a box test that never hides what may show.
 
 #include "DepthPyramid.h"
+#include "OcclusionBoxes.h"
 
 #include <glm/gtc/matrix_transform.hpp>
 #include <gtest/gtest.h>
@@ -85,15 +86,7 @@ struct WallView {
     }
 };
 
-OcclusionBox boxAround(const glm::vec3& centre, float half) {
-    OcclusionBox box;
-    for (int i = 0; i < 8; ++i)
-        box.corners[static_cast<std::size_t>(i)] = centre + half * glm::vec3(
-                                                                           (i & 1) ? 1.0f : -1.0f,
-                                                                           (i & 2) ? 1.0f : -1.0f,
-                                                                           (i & 4) ? 1.0f : -1.0f);
-    return box;
-}
+using test::boxAround;
 
 TEST(DepthPyramidTest, ABoxBehindAWallIsHiddenAndOneBesideItIsNot) {
     WallView view;

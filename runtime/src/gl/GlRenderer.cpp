@@ -146,6 +146,10 @@ struct Renderer::Impl {
     void drawBatch(const glm::mat4& viewProjection);
     Status drawGeometry(const DrawList& list, const glm::mat4& viewProjection, FrameStats& stats);
     void drawCubes(const DrawList& list, const glm::mat4& viewProjection, float pixelScale);
+    /** Uploads the list's cubes and binds them, `program` and its view-projection for drawing. */
+    void bindCubes(const DrawList& list, GLuint program, const glm::mat4& viewProjection);
+    /** Draws the bound cubes: an 18-vertex instance each, or a sized point each. */
+    void drawBoundCubes(const DrawList& list, GLuint program, float pixelScale);
 };
 
 Renderer::Impl::~Impl() {
@@ -376,19 +380,34 @@ Status Renderer::Impl::drawGeometry(const DrawList& list, const glm::mat4& viewP
     return Status::ok();
 }
 
-void Renderer::Impl::drawCubes(const DrawList& list, const glm::mat4& viewProjection, float pixelScale) {
-    if (list.cubes.empty())
-        return;
+void Renderer::Impl::bindCubes(const DrawList& list, GLuint program, const glm::mat4& viewProjection) {
     const auto bytes = static_cast<GLsizeiptr>(list.cubes.size() * sizeof(CubeDraw));
     BatchBuffers& set = current();
     ensureCapacity(set.cubes, set.cubesCap, bytes);
     bufferSubData(set.cubes, 0, bytes, list.cubes.data());
-    const GLuint program = list.cubesOcclude ? (list.cubesAsPoints ? cubePointOccluderProgram : cubeOccluderProgram)
-                                             : (list.cubesAsPoints ? cubePointProgram : cubeProgram);
     glUseProgram(program);
     glUniformMatrix4fv(glGetUniformLocation(program, "uViewProjection"), 1, GL_FALSE, glm::value_ptr(viewProjection));
     glBindVertexArray(cubeVao);
     glBindVertexBuffer(0, set.cubes, 0, sizeof(CubeDraw));
+}
+
+void Renderer::Impl::drawBoundCubes(const DrawList& list, GLuint program, float pixelScale) {
+    if (list.cubesAsPoints) {
+        glUniform1f(glGetUniformLocation(program, "uPixelScale"), pixelScale);
+        glEnable(GL_PROGRAM_POINT_SIZE);
+        glDrawArraysInstanced(GL_POINTS, 0, 1, static_cast<GLsizei>(list.cubes.size()));
+        glDisable(GL_PROGRAM_POINT_SIZE);
+    } else {
+        glDrawArraysInstanced(GL_TRIANGLES, 0, 18, static_cast<GLsizei>(list.cubes.size()));
+    }
+}
+
+void Renderer::Impl::drawCubes(const DrawList& list, const glm::mat4& viewProjection, float pixelScale) {
+    if (list.cubes.empty())
+        return;
+    const GLuint program = list.cubesOcclude ? (list.cubesAsPoints ? cubePointOccluderProgram : cubeOccluderProgram)
+                                             : (list.cubesAsPoints ? cubePointProgram : cubeProgram);
+    bindCubes(list, program, viewProjection);
     if (list.cubesOcclude) {
         // Depth only; the opacity sums of earlier batches must be visible to this one's loads.
         glMemoryBarrier(GL_SHADER_IMAGE_ACCESS_BARRIER_BIT);
@@ -401,14 +420,7 @@ void Renderer::Impl::drawCubes(const DrawList& list, const glm::mat4& viewProjec
         glBlendFunc(GL_ONE, GL_ONE_MINUS_SRC_ALPHA); // premultiplied "over", back to front
         glDepthMask(GL_FALSE);
     }
-    if (list.cubesAsPoints) {
-        glUniform1f(glGetUniformLocation(program, "uPixelScale"), pixelScale);
-        glEnable(GL_PROGRAM_POINT_SIZE);
-        glDrawArraysInstanced(GL_POINTS, 0, 1, static_cast<GLsizei>(list.cubes.size()));
-        glDisable(GL_PROGRAM_POINT_SIZE);
-    } else {
-        glDrawArraysInstanced(GL_TRIANGLES, 0, 18, static_cast<GLsizei>(list.cubes.size()));
-    }
+    drawBoundCubes(list, program, pixelScale);
     glDepthMask(GL_TRUE);
     glDisable(GL_BLEND);
     glColorMask(GL_TRUE, GL_TRUE, GL_TRUE, GL_TRUE);
@@ -569,26 +581,11 @@ BatchVisibility Renderer::visibleParts(const DrawList& batch) {
         bit += draw.triangleCount;
     }
     if (!batch.cubes.empty()) {
-        const auto bytes = static_cast<GLsizeiptr>(batch.cubes.size() * sizeof(CubeDraw));
-        Impl::BatchBuffers& set = s.current();
-        ensureCapacity(set.cubes, set.cubesCap, bytes);
-        bufferSubData(set.cubes, 0, bytes, batch.cubes.data());
         const GLuint program = batch.cubesAsPoints ? s.visibleCubePointProgram : s.visibleCubeProgram;
-        glUseProgram(program);
-        glUniformMatrix4fv(glGetUniformLocation(program, "uViewProjection"), 1, GL_FALSE,
-                           glm::value_ptr(s.frameViewProjection));
+        s.bindCubes(batch, program, s.frameViewProjection);
         glUniform1ui(glGetUniformLocation(program, "uFirstBit"), static_cast<GLuint>(triangles));
-        glBindVertexArray(s.cubeVao);
-        glBindVertexBuffer(0, set.cubes, 0, sizeof(CubeDraw));
         glDepthFunc(GL_LESS);
-        if (batch.cubesAsPoints) {
-            glUniform1f(glGetUniformLocation(program, "uPixelScale"), s.framePixelScale);
-            glEnable(GL_PROGRAM_POINT_SIZE);
-            glDrawArraysInstanced(GL_POINTS, 0, 1, static_cast<GLsizei>(batch.cubes.size()));
-            glDisable(GL_PROGRAM_POINT_SIZE);
-        } else {
-            glDrawArraysInstanced(GL_TRIANGLES, 0, 18, static_cast<GLsizei>(batch.cubes.size()));
-        }
+        s.drawBoundCubes(batch, program, s.framePixelScale);
     }
     glMemoryBarrier(GL_BUFFER_UPDATE_BARRIER_BIT);
     std::vector<GLuint> shown(static_cast<std::size_t>(words));
