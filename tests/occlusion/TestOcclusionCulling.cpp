@@ -337,6 +337,13 @@ TEST_P(NothingVisibleIsCulled, AlongAWalkWithJumps) {
         ASSERT_TRUE(culled.isOk()) << culled.status().toString();
         auto reference = mPlain->render(frame(walk[i], epsilon, false));
         ASSERT_TRUE(reference.isOk()) << reference.status().toString();
+        // The oracle keeps exactly the triangles and cubes of the frustum-culled frame that show
+        // a sample; culling by nodes may draw more, never fewer (a count check beside the image
+        // check below: a culled node that held one of them would draw fewer).
+        auto shows = mPlain->renderOracle(frame(walk[i], epsilon, false));
+        ASSERT_TRUE(shows.isOk()) << shows.status().toString();
+        EXPECT_GE(culled->stats.trianglesDrawn, shows->stats.trianglesDrawn);
+        EXPECT_GE(culled->stats.cubesDrawn, shows->stats.cubesDrawn);
         // Where surfaces tie in depth (the forest's crossed leaves), draw order decides: the
         // same walk with every answer taken as visible draws in culling's order without
         // culling, and counts those pixels.
