@@ -126,6 +126,7 @@ struct OcclusionTraversal::Impl {
         std::uint32_t transform;
         std::uint32_t parent; ///< the slot of the node that queued it (kNone: the root)
         std::uint32_t depth;
+        bool worthTesting = false; ///< worthTesting(), decided when it was queued
     };
     /** A node the walk reached this frame, for pulling visibility up. */
     struct Slot {
@@ -472,7 +473,8 @@ void OcclusionTraversal::Impl::pushChild(
     const float distance = t.metric.nearestDistance(
             toVec3(record.boundsMin), toVec3(record.boundsMax), t.localEye);
     queue.push_back({record, ref, distance, projected, transform, parent, depth});
-    if (!worthTesting(queue.back()))
+    queue.back().worthTesting = worthTesting(queue.back());
+    if (!queue.back().worthTesting)
         ++untestedMet; // drawn whole when it leaves the queue
     std::push_heap(queue.begin(), queue.end(), farther);
 }
@@ -517,7 +519,7 @@ void OcclusionTraversal::Impl::process(const Entry& entry) {
     slots.push_back({key, entry.parent, false});
     const Tested visit{entry, slot, projected};
     currentSlot = slot;
-    if (!worthTesting(entry)) {
+    if (!entry.worthTesting) {
         // Too little below it to pay for a test: drawn whole, without tests or history.
         markVisible(slot);
         drawSubtree(node, entry.transform, entry.depth);
