@@ -534,8 +534,12 @@ BatchVisibility Renderer::visibleParts(const DrawList& batch) {
         auto program = linkGlProgram({gl::kGeometryVertexShader}, gl::kVisibleTriangleFragmentShader);
         auto cube = linkGlProgram({gl::kCubeShaderInputs, gl::kCubeVertexShader}, gl::kVisibleCubeFragmentShader);
         auto point = linkGlProgram({gl::kCubeShaderInputs, gl::kCubePointVertexShader}, gl::kVisibleCubeFragmentShader);
-        if (!program || !cube || !point)
+        if (!program || !cube || !point) {
+            for (const auto* linked : {&program, &cube, &point})
+                if (*linked)
+                    glDeleteProgram(**linked);
             return visible; // unknown: everything shows
+        }
         s.visibleTriangleProgram = *program;
         s.visibleCubeProgram = *cube;
         s.visibleCubePointProgram = *point;
