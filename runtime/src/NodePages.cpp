@@ -76,17 +76,24 @@ bool drawsCubesAsPoints(const SelectionOptions& options) {
 
 std::uint32_t cubeFacesToward(
         const storage::NodeRecord& node, const glm::vec3& localEye, std::uint8_t leastAlpha) {
-    const glm::vec3 lo = toVec3(node.cellMin);
-    const glm::vec3 hi = toVec3(node.cellMax);
-    std::uint32_t faces = 0;
+    return cubeFacesToward(toVec3(node.cellMin), toVec3(node.cellMax), node.cube, localEye, leastAlpha);
+}
+
+std::uint32_t cubeFacesToward(
+        const glm::vec3& lo,
+        const glm::vec3& hi,
+        const std::array<std::array<std::uint8_t, 4>, storage::kCubeFaceCount>& faces,
+        const glm::vec3& localEye,
+        std::uint8_t leastAlpha) {
+    std::uint32_t toward = 0;
     for (int axis = 0; axis < 3; ++axis) {
         const auto minus = static_cast<std::size_t>(2 * axis);
-        if (localEye[axis] < lo[axis] && node.cube[minus][3] >= leastAlpha)
-            ++faces;
-        if (localEye[axis] > hi[axis] && node.cube[minus + 1][3] >= leastAlpha)
-            ++faces;
+        if (localEye[axis] < lo[axis] && faces[minus][3] >= leastAlpha)
+            ++toward;
+        if (localEye[axis] > hi[axis] && faces[minus + 1][3] >= leastAlpha)
+            ++toward;
     }
-    return faces;
+    return toward;
 }
 
 bool drawnAsCube(

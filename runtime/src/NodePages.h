@@ -56,6 +56,13 @@ bool drawnAsCube(const storage::NodeRecord& node, float projected, const Selecti
  *  alpha at least `leastAlpha`. */
 std::uint32_t cubeFacesToward(
         const storage::NodeRecord& node, const glm::vec3& localEye, std::uint8_t leastAlpha);
+/** The same for a cube as drawn (the box [lo, hi] with `faces`, in kCubeFace order). */
+std::uint32_t cubeFacesToward(
+        const glm::vec3& lo,
+        const glm::vec3& hi,
+        const std::array<std::array<std::uint8_t, 4>, storage::kCubeFaceCount>& faces,
+        const glm::vec3& localEye,
+        std::uint8_t leastAlpha);
 
 /** Whether a frame draws its cubes as area-weighted points (`--cube-draw`), in every pass. */
 bool drawsCubesAsPoints(const SelectionOptions& options);

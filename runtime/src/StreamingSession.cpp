@@ -1,4 +1,5 @@
 #include "CachedPageAccess.h"
+#include "NodePages.h"
 
 #include <ff/cache/PageCache.h>
 #include <ff/cache/ScenePageSource.h>
@@ -364,7 +365,8 @@ public:
                 continue;
             }
             ++mCubesLeft;
-            mFacesLeft += facesTowardEye(batch.cubes[c], batch.localEyes[batch.cubes[c].transform]);
+            const CubeDraw& cube = batch.cubes[c];
+            mFacesLeft += detail::cubeFacesToward(cube.boxMin, cube.boxMax, cube.faces, batch.localEyes[cube.transform], 1);
         }
         return mRenderer.draw(mScratch, stats);
     }
@@ -378,19 +380,6 @@ public:
     }
 
 private:
-    /** The faces the walk counted for a cube (cube_faces_drawn): toward the eye, alpha > 0. */
-    static std::uint64_t facesTowardEye(const CubeDraw& cube, const glm::vec3& eye) {
-        std::uint64_t faces = 0;
-        for (int axis = 0; axis < 3; ++axis) {
-            const auto minus = static_cast<std::size_t>(2 * axis);
-            if (eye[axis] < cube.boxMin[axis] && cube.faces[minus][3] > 0)
-                ++faces;
-            if (eye[axis] > cube.boxMax[axis] && cube.faces[minus + 1][3] > 0)
-                ++faces;
-        }
-        return faces;
-    }
-
     Renderer& mRenderer;
     const std::vector<BatchVisibility>& mVisible;
     std::size_t mNext = 0;
