@@ -544,9 +544,17 @@ void OcclusionTraversal::Impl::draw(const Tested& node, bool answered) {
 bool OcclusionTraversal::Impl::testable(const Entry& entry, OcclusionBox& box) const {
     const storage::NodeRecord& node = entry.record;
     const Transform& t = transforms[entry.transform];
-    // The box that holds all the node can draw: its geometry below and its cube.
-    glm::vec3 lo = glm::min(toVec3(node.boundsMin), toVec3(node.cellMin));
-    glm::vec3 hi = glm::max(toVec3(node.boundsMax), toVec3(node.cellMax));
+    // The box that holds all the node can draw: its geometry below and, where the ε rule draws
+    // cubes, the cells of its cubes. At ε = 0 a cube only stands in for geometry not resident
+    // yet, which lies in the tight bounds: if they are hidden, so is what it stands for. (An
+    // octree's cell reaches far past a building's walls, above its roof, where the street's
+    // facades do not hide it.)
+    glm::vec3 lo = toVec3(node.boundsMin);
+    glm::vec3 hi = toVec3(node.boundsMax);
+    if (frame->selection.epsilonPixels > 0.0f) {
+        lo = glm::min(lo, toVec3(node.cellMin));
+        hi = glm::max(hi, toVec3(node.cellMax));
+    }
     // Grown a little, so a surface drawn exactly on the box's face does not hide the box from
     // itself by a rounding of its depth.
     const glm::vec3 extent = hi - lo;
