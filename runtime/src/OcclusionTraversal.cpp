@@ -127,6 +127,8 @@ struct OcclusionTraversal::Impl {
         std::uint32_t parent; ///< the slot of the node that queued it (kNone: the root)
         std::uint32_t depth;
         bool worthTesting = false; ///< worthTesting(), decided when it was queued
+        /** Its slot, for a node held back from its test (queueForTest) and queued again. */
+        std::uint32_t heldSlot = kNone;
     };
     /** A node the walk reached this frame, for pulling visibility up. */
     struct Slot {
@@ -140,6 +142,8 @@ struct OcclusionTraversal::Impl {
         Entry entry;
         std::uint32_t slot;
         float projected;
+        glm::vec3 worldMin{0.0f}; ///< its test box's world bounds (set when it is queued)
+        glm::vec3 worldMax{0.0f};
     };
     struct Query {
         QueryTicket ticket;
@@ -196,7 +200,13 @@ struct OcclusionTraversal::Impl {
     const storage::PrototypeRecord* prototypeBelow(const Entry& entry) const;
     void reportCycle();
     detail::Verdict classify(const storage::NodeRecord& node, const Transform& t, float& projected);
-    void queueForTest(const Tested& node);
+    void queueForTest(Tested node);
+    /** Whether a nearer node whose box overlaps the node's is still waiting for its answer: if
+     *  that one is visible, what it draws may hide this one, and a test issued now would not
+     *  see it (a building's furniture tested beside its walls). */
+    bool behindUnanswered(const Tested& node) const;
+    /** Held nodes no unanswered node stands in front of any more, back into the queue. */
+    void releaseHeld();
     void issueQueued();
     void answer(const Query& query, bool visible);
     void testLate(const Entry& entry, std::uint32_t slot);
@@ -252,6 +262,8 @@ struct OcclusionTraversal::Impl {
     std::vector<Entry> queue; ///< a min-heap on distance
     std::vector<Slot> slots;
     std::vector<Tested> waiting; ///< queued for the next batch of tests
+    std::vector<Tested> held;    ///< held back from their tests (behindUnanswered)
+    bool answeredSinceRelease = false; ///< some answer came since releaseHeld() last looked
     std::vector<Tested> tested;  ///< in a test (Query ranges point here)
     std::deque<Query> pending;
     std::vector<LateQuery> late;
@@ -326,6 +338,8 @@ Status OcclusionTraversal::Impl::traverse(
     queue.clear();
     slots.clear();
     waiting.clear();
+    held.clear();
+    answeredSinceRelease = false;
     tested.clear();
     pending.clear();
     late.clear();
@@ -344,7 +358,7 @@ Status OcclusionTraversal::Impl::traverse(
     }
     pushChild(root, rootRef, 0, kNone, 0);
     IOcclusionTester& tester = *services->occlusion;
-    while (!queue.empty() || !waiting.empty() || !pending.empty()) {
+    while (!queue.empty() || !waiting.empty() || !pending.empty() || !held.empty()) {
         // Answers that have arrived; when there is nothing else to do, wait for the oldest.
         while (!pending.empty()) {
             const auto asked = std::chrono::steady_clock::now();
@@ -361,6 +375,9 @@ Status OcclusionTraversal::Impl::traverse(
             stats->occlusionMs += millisecondsSince(asked);
             answer(query, visible);
         }
+        if (!held.empty() &&
+            (answeredSinceRelease || (queue.empty() && waiting.empty() && pending.empty())))
+            releaseHeld();
         if (queue.empty()) {
             if (!waiting.empty())
                 issueQueued();
@@ -514,6 +531,11 @@ void OcclusionTraversal::Impl::process(const Entry& entry) {
     const storage::NodeRecord& node = entry.record;
     const Transform& t = transforms[entry.transform];
     const float projected = entry.projected;
+    if (entry.heldSlot != kNone) {
+        currentSlot = entry.heldSlot;
+        queueForTest({entry, entry.heldSlot, projected});
+        return;
+    }
     const NodeKey key{t.instancePath, entry.ref};
     const auto slot = static_cast<std::uint32_t>(slots.size());
     slots.push_back({key, entry.parent, false});
@@ -624,7 +646,7 @@ QueryTicket OcclusionTraversal::Impl::issue(std::span<const OcclusionBox> group)
     return services->occlusion->issue(group);
 }
 
-void OcclusionTraversal::Impl::queueForTest(const Tested& node) {
+void OcclusionTraversal::Impl::queueForTest(Tested node) {
     // Nothing to test against yet (the first occluders are being drawn), the box reaches the
     // eye, or the frame's tests are spent: the node is Unknown, and Unknown is drawn.
     OcclusionBox box;
@@ -634,7 +656,46 @@ void OcclusionTraversal::Impl::queueForTest(const Tested& node) {
         draw(node);
         return;
     }
+    node.worldMin = glm::vec3(INFINITY);
+    node.worldMax = glm::vec3(-INFINITY);
+    for (const glm::vec3& corner : box.corners) {
+        node.worldMin = glm::min(node.worldMin, corner);
+        node.worldMax = glm::max(node.worldMax, corner);
+    }
+    if (behindUnanswered(node)) {
+        held.push_back(node);
+        return;
+    }
     waiting.push_back(node);
+}
+
+bool OcclusionTraversal::Impl::behindUnanswered(const Tested& node) const {
+    const auto inFront = [&](const Tested& other) {
+        return other.entry.distance < node.entry.distance &&
+               glm::all(glm::lessThanEqual(other.worldMin, node.worldMax)) &&
+               glm::all(glm::lessThanEqual(node.worldMin, other.worldMax));
+    };
+    if (std::any_of(waiting.begin(), waiting.end(), inFront))
+        return true;
+    for (const Query& query : pending)
+        for (std::uint32_t i = 0; i < query.count; ++i)
+            if (inFront(tested[query.first + i]))
+                return true;
+    return false;
+}
+
+void OcclusionTraversal::Impl::releaseHeld() {
+    answeredSinceRelease = false;
+    // Queued again rather than tested now: what the answered node draws is queued too (its
+    // children), and may stand in front of a held node again.
+    std::erase_if(held, [&](const Tested& node) {
+        if (behindUnanswered(node))
+            return false;
+        queue.push_back(node.entry);
+        queue.back().heldSlot = node.slot;
+        std::push_heap(queue.begin(), queue.end(), farther);
+        return true;
+    });
 }
 
 void OcclusionTraversal::Impl::issueQueued() {
@@ -708,6 +769,7 @@ void OcclusionTraversal::Impl::answer(const Query& query, bool visible) {
         stats->occlusionMs += millisecondsSince(start);
         return;
     }
+    answeredSinceRelease = true;
     for (std::uint32_t i = 0; i < query.count; ++i) {
         const Tested node = tested[query.first + i];
         History& h = history[slots[node.slot].key];

@@ -353,8 +353,9 @@ TEST_P(NothingVisibleIsCulled, AlongAWalkWithJumps) {
         ASSERT_TRUE(unculled.isOk()) << unculled.status().toString();
         const std::size_t ties = differingPixels(unculled->image, reference->image);
         // The forest's leaves cross and coincide, so its ties run higher than the molecule's
-        // (up to 193 pixels, 0.063 %, from inside it on the cold frame after the jump there).
-        const double tieShare = generator.starts_with("forest") ? 1e-3 : kTiedPixelShare;
+        // (up to 451 pixels, 0.15 %, from inside it on the cold frame after the jump there,
+        // where nodes held back behind unanswered ones are drawn later than their distance).
+        const double tieShare = generator.starts_with("forest") ? 2e-3 : kTiedPixelShare;
         EXPECT_LE(
                 static_cast<double>(ties),
                 tieShare * unculled->image.width * unculled->image.height)

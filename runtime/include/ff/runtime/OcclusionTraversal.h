@@ -24,6 +24,10 @@ namespace ff::runtime {
  *       batches after the geometry drawn so far is flushed, those that stayed hidden together
  *       as multiqueries; the walk goes on while the answers are pending and waits only when it
  *       has nothing else to do;
+ *     - a node whose box overlaps the box of a nearer node still waiting for its answer is held
+ *       back until that answer is in (and what it drew is flushed): tested beside it, it would
+ *       not see what it may hide behind — a building's furniture beside its walls, on every
+ *       frame without history;
  *     - visibility is pulled up from what was drawn: an inner node none of whose subtree was
  *       seen is tested as a whole next frame.
  *     History decides only when a node is tested, never that it is skipped: a node is skipped
