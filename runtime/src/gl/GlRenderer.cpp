@@ -139,6 +139,10 @@ struct Renderer::Impl {
 
     ~Impl();
     Status ensureTarget(int width, int height);
+    /** The opacity layers of cube occluders, at the target's size (made once per target). */
+    void ensureOpacityTexture();
+    /** Draws each program once with the state a frame draws it with (warmPrograms()). */
+    Status warmPrograms();
     Status ensurePresentSource();
     void uploadTransforms(const DrawList& list);
     Result<std::uint32_t> residentSlot(const GeometryDraw& draw, FrameStats& stats);
@@ -259,7 +263,55 @@ Result<std::unique_ptr<Renderer>> Renderer::create(const storage::SceneFile& sce
     glBindVertexArray(0);
     if (const GLenum error = glGetError(); error != GL_NO_ERROR)
         return Status(ErrorCode::Internal, "OpenGL error " + std::to_string(error) + " while creating the renderer");
+    FF_RETURN_IF_ERROR(impl->warmPrograms());
     return std::unique_ptr<Renderer>(new Renderer(std::move(impl)));
+}
+
+// llvmpipe compiles a program's shaders for the state it is drawn with at the first draw with
+// that state, not at link time: the geometry program's first draw took 21 ms here, as long as a
+// street view of the city with occlusion culling takes to draw. Paid once, when the renderer is
+// made, rather than by its first frame (a one-shot render's only one). Drawn into a 1x1 target
+// that the first frame replaces or clears.
+Status Renderer::Impl::warmPrograms() {
+    FF_RETURN_IF_ERROR(ensureTarget(1, 1));
+    glBindFramebuffer(GL_FRAMEBUFFER, framebuffer);
+    glViewport(0, 0, 1, 1);
+    glEnable(GL_FRAMEBUFFER_SRGB);
+    glDisable(GL_CULL_FACE);
+    glEnable(GL_DEPTH_TEST);
+    glDepthFunc(GL_LESS);
+    glDepthMask(GL_TRUE);
+    glDisable(GL_BLEND);
+    const glm::mat4 identity(1.0f);
+    DrawList list;
+    list.transforms.push_back(identity);
+    list.localEyes.push_back(glm::vec3(0.0f));
+    uploadTransforms(list);
+    // The arena's first triangle, whatever it holds (no page is resident yet).
+    commands.push_back({3, 1, 0, 0});
+    drawBatch(identity);
+    list.cubes.push_back({glm::vec3(-0.5f), glm::vec3(0.5f), 0, {}});
+    ensureOpacityTexture();
+    for (const bool occlude : {false, true})
+        for (const bool points : {false, true}) {
+            list.cubesOcclude = occlude;
+            list.cubesAsPoints = points;
+            drawCubes(list, identity, 1.0f);
+        }
+    queries->warm();
+    glFinish();
+    glBindFramebuffer(GL_FRAMEBUFFER, 0);
+    if (const GLenum error = glGetError(); error != GL_NO_ERROR)
+        return Status(ErrorCode::Internal, "OpenGL error " + std::to_string(error) + " while warming the renderer's programs");
+    return Status::ok();
+}
+
+void Renderer::Impl::ensureOpacityTexture() {
+    if (opacityTexture)
+        return;
+    glGenTextures(1, &opacityTexture);
+    glBindTexture(GL_TEXTURE_2D_ARRAY, opacityTexture);
+    glTexStorage3D(GL_TEXTURE_2D_ARRAY, 1, GL_R32UI, targetWidth, targetHeight, 2);
 }
 
 Status Renderer::Impl::ensureTarget(int width, int height) {
@@ -497,11 +549,7 @@ Status Renderer::beginFrame(const FrameContext& frame, FrameOutput output, Frame
     glClearDepth(1.0);
     glClear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
     if (frame.occlusion.enabled && frame.occlusion.cubesOcclude) {
-        if (!s.opacityTexture) { // made for the frames that use it, at the target's size
-            glGenTextures(1, &s.opacityTexture);
-            glBindTexture(GL_TEXTURE_2D_ARRAY, s.opacityTexture);
-            glTexStorage3D(GL_TEXTURE_2D_ARRAY, 1, GL_R32UI, sampleWidth, sampleHeight, 2);
-        }
+        s.ensureOpacityTexture(); // made for the frames that use it
         const GLuint nothing = 0;
         glClearTexImage(s.opacityTexture, 0, GL_RED_INTEGER, GL_UNSIGNED_INT, &nothing);
     }

@@ -105,6 +105,15 @@ QueryTicket OcclusionQueries::issue(std::span<const OcclusionBox> group) {
     return ticket;
 }
 
+void OcclusionQueries::warm() {
+    beginFrame(glm::mat4(1.0f));
+    OcclusionBox box;
+    for (std::size_t c = 0; c < box.corners.size(); ++c)
+        box.corners[c] = glm::vec3(c & 1 ? 0.5f : -0.5f, c & 2 ? 0.5f : -0.5f, c & 4 ? 0.5f : -0.5f);
+    const QueryTicket ticket = issue({&box, 1});
+    (void)anyVisible(ticket);
+}
+
 bool OcclusionQueries::ready(QueryTicket ticket) const {
     GLuint available = 0;
     glGetQueryObjectuiv(mPool[ticket], GL_QUERY_RESULT_AVAILABLE, &available);

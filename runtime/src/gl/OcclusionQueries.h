@@ -31,6 +31,9 @@ public:
     [[nodiscard]] QueryTicket issue(std::span<const OcclusionBox> group);
     [[nodiscard]] bool ready(QueryTicket ticket) const;
     [[nodiscard]] bool anyVisible(QueryTicket ticket) const;
+    /** Issues one query and waits for it, so its program is compiled before the first frame
+     *  (llvmpipe compiles at the first draw). Its ticket is void at the next beginFrame(). */
+    void warm();
 
     /** Boxes one query draws at most (a larger group is split over several draws). */
     static constexpr std::size_t kBoxesPerDraw = 8;
