@@ -1,0 +1,63 @@
+#pragma once
+
+// One node's triangles as compact clusters: positions quantized on the prototype's grid,
+// identical vertices merged, the index buffer split into meshlets (meshopt_buildMeshlets) and
+// each meshlet ordered for the vertex cache and encoded (storage/ClusterCodec.h).
+
+#include <ff/storage/ClusterCodec.h>
+#include <ff/storage/SceneFormat.h>
+#include <ff/storage/Status.h>
+
+#include <cstddef>
+#include <cstdint>
+#include <span>
+#include <vector>
+
+namespace ff::builder {
+
+/** Cluster limits; meshopt 0.18 allows at most 255 vertices and 512 triangles (a multiple of 4). */
+struct ClusterLimits {
+    std::uint32_t maxVertices = 128;
+    std::uint32_t maxTriangles = 256;
+};
+
+/** What encoding a node's triangles made. */
+struct ClusterBuildStats {
+    std::uint64_t clusters = 0;
+    std::uint64_t trianglesIn = 0;
+    std::uint64_t trianglesKept = 0;   ///< after dropping those quantization collapsed
+    std::uint64_t uniqueVertices = 0;  ///< after merging identical quantized vertices
+    std::uint64_t clusterVertices = 0; ///< vertices over all clusters (shared ones repeat)
+    std::uint64_t encodedBytes = 0;
+    std::uint64_t wideClusters = 0;
+
+    ClusterBuildStats& operator+=(const ClusterBuildStats& other) noexcept;
+};
+
+/**
+ * Appends the clusters of `triangles` to `out`, one after the other (each starts with its
+ * header: storage::readClusterInfo walks them), and returns what it made. A triangle whose
+ * corners quantize onto fewer than three grid points draws nothing and is dropped. The same
+ * input always gives the same bytes. Scratch is reused through `scratch` across calls.
+ */
+class ClusterEncoder {
+public:
+    explicit ClusterEncoder(ClusterLimits limits = {});
+
+    [[nodiscard]] Result<ClusterBuildStats>
+    encode(std::span<const storage::PackedTriangle> triangles,
+           const storage::PositionGrid& grid,
+           std::vector<std::byte>& out);
+
+private:
+    ClusterLimits mLimits;
+    std::vector<storage::ClusterVertex> mCorners;
+    std::vector<unsigned int> mRemap;
+    std::vector<storage::ClusterVertex> mVertices;
+    std::vector<float> mPositions;
+    std::vector<unsigned int> mIndices;
+    std::vector<unsigned int> mMeshletVertices;
+    std::vector<unsigned char> mMeshletTriangles;
+};
+
+} // namespace ff::builder
