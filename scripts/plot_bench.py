@@ -1,7 +1,7 @@
 #!/usr/bin/python3
 """Charts for `farfield bench`: reads a scenario's CSV, writes PNG charts named after it.
 
-usage: plot_bench.py {table2|forest|build|paging|views|path|replay} CSV OUTDIR
+usage: plot_bench.py {table2|forest|build|paging|views|path|replay|render|codec} CSV OUTDIR
 
 CSV is OUT/NAME.csv (paging: OUT/NAME-working-set.csv, with OUT/NAME-teleports.csv beside it);
 the charts are OUTDIR/NAME.png (views with a sweep also NAME-sweep.png; paging
@@ -358,7 +358,35 @@ def render(data, out, name):
     fig.savefig(out / f"{name}.png", dpi=110)
 
 
-KINDS = {"table2": table2, "forest": forest, "build": build, "paging": paging, "views": views, "path": path, "replay": replay, "render": render}
+def codec(data, out, name):
+    """Bytes a triangle and decode rate per scene, one bar per variant, v1 and the targets."""
+    scenes = list(dict.fromkeys(r["scene"] for r in data))
+    variants = list(dict.fromkeys(r["variant"] for r in data))
+    fig, (ax1, ax2) = plt.subplots(1, 2, figsize=(12, 4.6))
+    width = 0.8 / max(len(variants), 1)
+    for i, v in enumerate(variants):
+        sel = {r["scene"]: r for r in data if r["variant"] == v}
+        xs = [k + (i - (len(variants) - 1) / 2) * width for k in range(len(scenes))]
+        ax1.bar(xs, [number(sel[s]["bytes_per_triangle"]) if s in sel else math.nan for s in scenes], width, label=v)
+        ax2.bar(xs, [number(sel[s]["decode_gb_per_s"]) if s in sel else math.nan for s in scenes], width, label=v)
+    v1 = {r["scene"]: number(r["v1_file_bytes_per_triangle"]) for r in data}
+    for k, s in enumerate(scenes):
+        ax1.annotate(f"v1 file: {v1[s]:.0f}", (k, 0.2), ha="center", fontsize=7, rotation=90, va="bottom")
+    ax1.axhline(8.0, color="k", linestyle=":", label="target 8 B / triangle (whole file)")
+    ax2.axhline(1.0, color="k", linestyle=":", label="target 1 GB/s / core")
+    for ax in (ax1, ax2):
+        ax.set_xticks(range(len(scenes)))
+        ax.set_xticklabels(scenes, rotation=20, ha="right", fontsize=8)
+        ax.legend(fontsize=7)
+    ax1.set_ylabel("cluster bytes / triangle")
+    ax2.set_ylabel("decoded GB/s on one core")
+    ax1.set_title("compact geometry: size")
+    ax2.set_title("compact geometry: decode")
+    fig.tight_layout()
+    fig.savefig(out / f"{name}.png", dpi=110)
+
+
+KINDS = {"table2": table2, "forest": forest, "build": build, "paging": paging, "views": views, "path": path, "replay": replay, "render": render, "codec": codec}
 
 
 def main():

@@ -23,6 +23,7 @@ public:
     [[nodiscard]] Status write(const std::filesystem::path& path) const;
     /** The same table as Markdown, for reports. */
     std::string markdown() const;
+    std::size_t rowCount() const noexcept { return mRows.size(); }
 
 private:
     std::vector<std::string> mColumns;

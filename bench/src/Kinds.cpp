@@ -11,7 +11,7 @@ namespace {
 
 using Prepare = Result<BenchRun> (*)(const Scenario&);
 
-constexpr std::array<std::pair<const char*, Prepare>, 8> kKinds = {{
+constexpr std::array<std::pair<const char*, Prepare>, 9> kKinds = {{
         {"table2", prepareTable2},
         {"forest", prepareForest},
         {"build", prepareBuild},
@@ -20,6 +20,7 @@ constexpr std::array<std::pair<const char*, Prepare>, 8> kKinds = {{
         {"path", preparePath},
         {"replay", prepareReplay},
         {"render", prepareRender},
+        {"codec", prepareCodec},
 }};
 
 } // namespace

@@ -1,4 +1,4 @@
-#include "ClusterBuild.h"
+#include <ff/builder/ClusterBuild.h>
 #include "RecordingSink.h"
 
 #include <ff/builder/Generators.h>

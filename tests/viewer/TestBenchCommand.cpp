@@ -333,6 +333,35 @@ TEST(BenchCommandTest, RenderScenarioMeasuresTheFramesPeakMemoryAgainstItsLimit)
     EXPECT_NE(readText(out / "tiny-render.md").find("| near |"), std::string::npos);
 }
 
+// The codec benchmark in miniature: the terrain's v1 leaves (a few triangles each) and the same
+// hierarchy cut at subtrees of <= 4096 triangles, encoded as clusters and decoded again: every
+// triangle kept, larger leaves store fewer bytes a triangle, both far below v1's file.
+TEST(BenchCommandTest, CodecScenarioEncodesTheLeavesOfABuildAndDecodesThemAgain) {
+    const fs::path dir = freshTestDir();
+    writeText(dir / "tiny-codec.json", R"({
+  "name": "tiny-codec",
+  "title": "A tiny codec scenario",
+  "kind": "codec",
+  "scenes": [{"label": "terrain", "generate": "terrain:triangles=20000"}],
+  "variants": [{"leaf_triangles": 0}, {"leaf_triangles": 4096}],
+  "decode_seconds": 0.05
+})");
+    const fs::path out = dir / "out";
+    const ProcessResult r = runFarfield({"bench", (dir / "tiny-codec.json").string(), "--out", out.string()}, dir);
+    ASSERT_EQ(r.exitCode, 0) << r.describe();
+    const std::vector<Row> rows = readCsv(out / "tiny-codec.csv");
+    ASSERT_EQ(rows.size(), 3u);
+    for (std::size_t i = 1; i < rows.size(); ++i) {
+        EXPECT_EQ(cell(rows, i, "triangles_kept"), cell(rows, i, "stored_triangles"));
+        EXPECT_GT(std::stod(cell(rows, i, "decode_gb_per_s")), 0.0);
+        EXPECT_LT(std::stod(cell(rows, i, "bytes_per_triangle")), std::stod(cell(rows, i, "v1_file_bytes_per_triangle")) / 3);
+    }
+    EXPECT_GT(std::stoull(cell(rows, 1, "leaves")), std::stoull(cell(rows, 2, "leaves")));
+    EXPECT_LT(std::stod(cell(rows, 2, "bytes_per_triangle")), std::stod(cell(rows, 1, "bytes_per_triangle")));
+    EXPECT_TRUE(fs::is_regular_file(out / "tiny-codec.png"));
+    EXPECT_NE(readText(out / "tiny-codec.md").find("| terrain |"), std::string::npos);
+}
+
 constexpr const char* kReplayScenario = R"({
   "name": "tiny-replay",
   "title": "A tiny replay scenario",

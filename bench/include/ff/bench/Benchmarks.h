@@ -46,6 +46,10 @@ using BenchRun = std::function<Status(const BenchOptions&)>;
  *  optional limit (the memory of a frame whatever its cut). */
 [[nodiscard]] Result<BenchRun> prepareRender(const Scenario& scenario);
 
+/** Compact geometry: every node's triangles of built scenes encoded as clusters (format v2's
+ *  codec) per variant, bytes a triangle and decode rate, beside format v1 and Draco. */
+[[nodiscard]] Result<BenchRun> prepareCodec(const Scenario& scenario);
+
 /** The prepare function of the scenario's kind. */
 [[nodiscard]] Result<BenchRun> prepareScenario(const Scenario& scenario);
 

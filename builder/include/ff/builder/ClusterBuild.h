@@ -38,7 +38,7 @@ struct ClusterBuildStats {
  * Appends the clusters of `triangles` to `out`, one after the other (each starts with its
  * header: storage::readClusterInfo walks them), and returns what it made. A triangle whose
  * corners quantize onto fewer than three grid points draws nothing and is dropped. The same
- * input always gives the same bytes. Scratch is reused through `scratch` across calls.
+ * input always gives the same bytes; the encoder keeps its scratch memory for the next call.
  */
 class ClusterEncoder {
 public:
