@@ -104,15 +104,29 @@ std::array<std::int16_t, 2> decodeNormal12(std::array<std::int16_t, 2> code) noe
     return {at(code[0]), at(code[1])};
 }
 
-// Two roundings, in one fixed order: the product, then the sum. Every reader decodes a
-// coordinate with this function (inlined here into the decoder's loop, compiled once with
-// -ffp-contract=off), so a vertex two clusters share decodes to one float.
+// In double, where step · coordinate and the sum are exact to far below a float's precision,
+// rounded once to float. Every reader decodes a coordinate with this function (inlined here
+// into the decoder's loop, compiled once with -ffp-contract=off), so a vertex two clusters
+// share decodes to one float.
 inline std::array<float, 3>
 dequantize(const PositionGrid& grid, std::array<std::uint32_t, 3> coordinate) noexcept {
-    const float x = grid.step * static_cast<float>(coordinate[0]);
-    const float y = grid.step * static_cast<float>(coordinate[1]);
-    const float z = grid.step * static_cast<float>(coordinate[2]);
-    return {grid.origin[0] + x, grid.origin[1] + y, grid.origin[2] + z};
+    const double step = grid.step;
+    return {static_cast<float>(grid.origin[0] + step * coordinate[0]),
+            static_cast<float>(grid.origin[1] + step * coordinate[1]),
+            static_cast<float>(grid.origin[2] + step * coordinate[2])};
+}
+
+/** Largest extent of finite, ordered bounds. */
+Result<float> checkedExtent(std::array<float, 3> boundsMin, std::array<float, 3> boundsMax) {
+    float extent = 0.0f;
+    for (std::size_t a = 0; a < 3; ++a) {
+        if (!std::isfinite(boundsMin[a]) || !std::isfinite(boundsMax[a]) ||
+            boundsMax[a] < boundsMin[a])
+            return Status(
+                    ErrorCode::InvalidArgument, "position grid over empty or non-finite bounds");
+        extent = std::max(extent, boundsMax[a] - boundsMin[a]);
+    }
+    return extent;
 }
 
 Status corrupt(const std::string& what) {
@@ -128,22 +142,37 @@ PositionGrid::covering(std::array<float, 3> boundsMin, std::array<float, 3> boun
                 ErrorCode::InvalidArgument,
                 "position grid bits must be 1-" + std::to_string(kMaxPositionGridBits) + ", not " +
                         std::to_string(bits));
-    float extent = 0.0f;
-    for (std::size_t a = 0; a < 3; ++a) {
-        if (!std::isfinite(boundsMin[a]) || !std::isfinite(boundsMax[a]) ||
-            boundsMax[a] < boundsMin[a])
-            return Status(
-                    ErrorCode::InvalidArgument, "position grid over empty or non-finite bounds");
-        extent = std::max(extent, boundsMax[a] - boundsMin[a]);
-    }
+    FF_ASSIGN_OR_RETURN(const float extent, checkedExtent(boundsMin, boundsMax));
     PositionGrid grid;
     grid.origin = boundsMin;
     grid.bits = bits;
-    const auto steps = static_cast<float>((std::uint32_t{1} << bits) - 1);
+    const double steps = static_cast<double>((std::uint32_t{1} << bits) - 1);
     // Grown by a part in 2^20 so that the far corner rounds into the grid, not past it.
-    grid.step = extent > 0.0f ? extent * (1.0f + 0x1p-20f) / steps : 1.0f;
+    grid.step = extent > 0.0f ? static_cast<float>(extent * (1.0 + 0x1p-20) / steps) : 1.0f;
     if (!std::isfinite(grid.step) || !(grid.step > 0.0f))
         return Status(ErrorCode::InvalidArgument, "position grid step is not a positive float");
+    return grid;
+}
+
+Result<PositionGrid>
+PositionGrid::withStep(std::array<float, 3> boundsMin, std::array<float, 3> boundsMax, float step) {
+    if (!std::isfinite(step) || !(step > 0.0f))
+        return Status(ErrorCode::InvalidArgument, "position grid step must be a positive number");
+    FF_ASSIGN_OR_RETURN(const float extent, checkedExtent(boundsMin, boundsMax));
+    const double steps = std::ceil(static_cast<double>(extent) / step) + 1.0;
+    int bits = 1;
+    while (bits <= kMaxPositionGridBits && static_cast<double>(std::uint32_t{1} << bits) < steps)
+        ++bits;
+    if (bits > kMaxPositionGridBits)
+        return Status(
+                ErrorCode::InvalidArgument,
+                "a position grid step of " + std::to_string(step) + " over an extent of " +
+                        std::to_string(extent) + " needs more than " +
+                        std::to_string(kMaxPositionGridBits) + " bits");
+    PositionGrid grid;
+    grid.origin = boundsMin;
+    grid.step = step;
+    grid.bits = bits;
     return grid;
 }
 
@@ -165,13 +194,16 @@ PositionGrid::position(std::array<std::uint32_t, 3> coordinate) const noexcept {
 }
 
 float PositionGrid::maxError() const noexcept {
-    float largest = 0.0f;
-    for (std::size_t a = 0; a < 3; ++a)
-        largest = std::max(
-                largest,
-                std::fabs(origin[a]) + step * static_cast<float>(std::uint32_t{1} << bits));
-    // Half a step of quantization; the decode's product and sum round by half an ulp each.
-    return 0.5f * step + largest * 0x1p-23f;
+    // The farthest position the grid can decode, on any axis: its rounding to float is the
+    // largest.
+    double largest = 0.0;
+    for (std::size_t a = 0; a < 3; ++a) {
+        const double top = double{origin[a]} + double{step} * double(std::uint32_t{1} << bits);
+        largest = std::max({largest, std::fabs(double{origin[a]}), std::fabs(top)});
+    }
+    // Half a step of quantization, and the one rounding of the double result to float (the
+    // double arithmetic's own error is ~2^-29 of that).
+    return static_cast<float>(0.5 * step + largest * 0x1p-24 * (1.0 + 0x1p-20));
 }
 
 std::array<std::int16_t, 2> roundNormalTo12Bits(std::array<std::int16_t, 2> oct) noexcept {
@@ -205,7 +237,7 @@ Result<std::size_t> encodeCluster(
     for (const ClusterVertex& v : vertices)
         for (std::size_t a = 0; a < 3; ++a) {
             if (v.coordinate[a] >= (1u << kMaxPositionGridBits))
-                return Status(ErrorCode::InvalidArgument, "cluster coordinate beyond 2^24");
+                return Status(ErrorCode::InvalidArgument, "cluster coordinate beyond 2^31");
             lo[a] = std::min(lo[a], v.coordinate[a]);
             hi[a] = std::max(hi[a], v.coordinate[a]);
         }
@@ -289,7 +321,7 @@ Result<ClusterHeader> readHeader(std::span<const std::byte> bytes) {
         return corrupt("codec versions other than vertex 0 and index 1");
     for (std::size_t a = 0; a < 3; ++a)
         if (h.base[a] >= (1u << kMaxPositionGridBits))
-            return corrupt("base coordinate beyond 2^24");
+            return corrupt("base coordinate beyond 2^31");
     return h;
 }
 

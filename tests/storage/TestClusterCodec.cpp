@@ -170,7 +170,7 @@ TEST(ClusterCodecTest, AVertexTwoClustersShareDecodesToOneFloat) {
 }
 
 TEST(ClusterCodecTest, QuantizedPositionsStayWithinTheStatedErrorBound) {
-    for (const int bits : {8, 16, 20, 24}) {
+    for (const int bits : {8, 16, 20, 24, 28}) {
         const PositionGrid grid = testGrid(bits);
         std::mt19937 rng(static_cast<std::uint32_t>(bits));
         float worst = 0.0f;
@@ -192,6 +192,45 @@ TEST(ClusterCodecTest, QuantizedPositionsStayWithinTheStatedErrorBound) {
             EXPECT_LT(grid.maxError(), 8.0f / (1 << 20));
         }
     }
+}
+
+// A precision target in scene units, whatever the extent: a 10^9-triangle terrain (~45 k units
+// of 1-unit triangles) on a step of 1/1000 needs 26 bits, and stays within half a step plus the
+// float rounding of positions that large; a vertex shared by a narrow and a wide cluster there
+// decodes to one float.
+TEST(ClusterCodecTest, AGridOfAGivenStepCoversALargeExtentAtThatPrecision) {
+    const std::array<float, 3> lo = {-22360.0f, -50.0f, -22360.0f};
+    const std::array<float, 3> hi = {22360.0f, 400.0f, 22360.0f};
+    const auto grid = PositionGrid::withStep(lo, hi, 0.001f);
+    ASSERT_TRUE(grid.isOk()) << grid.status().toString();
+    EXPECT_EQ(grid->bits, 26);
+    // Half the step, and half a float ulp at the grid's farthest decodable position (the grid is a
+    // cube of 2^26 steps: ~67 k units out on the y axis; 0.004).
+    EXPECT_LT(grid->maxError(), 0.005f);
+    std::mt19937 rng(12);
+    float worst = 0.0f;
+    for (int i = 0; i < 20000; ++i) {
+        std::array<float, 3> p{};
+        for (std::size_t a = 0; a < 3; ++a)
+            p[a] = std::uniform_real_distribution<float>(lo[a], hi[a])(rng);
+        const auto back = grid->position(grid->quantize(p));
+        for (std::size_t a = 0; a < 3; ++a)
+            worst = std::max(worst, std::fabs(back[a] - p[a]));
+    }
+    EXPECT_LE(worst, grid->maxError());
+    const std::array<std::uint32_t, 3> far = grid->quantize({22000.5f, 12.25f, -21000.75f});
+    Patch narrow = makePatch(4, 4, 900, {far[0] - 2700, far[1], far[2] - 2700}, 13);
+    Patch wide = makePatch(4, 4, 40000, {far[0] - 120000, far[1], far[2] - 120000}, 14);
+    narrow.vertices[15].coordinate = far;
+    wide.vertices[15].coordinate = far;
+    ASSERT_FALSE(readClusterInfo(encode(narrow))->widePositions);
+    ASSERT_TRUE(readClusterInfo(encode(wide))->widePositions);
+    const auto a = decode(encode(narrow), *grid);
+    const auto b = decode(encode(wide), *grid);
+    ASSERT_TRUE(a.isOk() && b.isOk());
+    EXPECT_EQ(a->vertices[15].position, b->vertices[15].position);
+    EXPECT_FALSE(PositionGrid::withStep(lo, hi, 1e-6f).isOk()); // 45 G steps: past 31 bits
+    EXPECT_FALSE(PositionGrid::withStep(lo, hi, 0.0f).isOk());
 }
 
 // 12-bit octahedral normals: at most 0.062 degrees off over this sweep of the sphere (measured;
@@ -232,7 +271,7 @@ TEST(ClusterCodecTest, TheEncoderRefusesClustersOutsideItsLimits) {
     std::vector<std::uint8_t> notTriangles(p.indices.begin(), p.indices.end() - 1);
     EXPECT_FALSE(encodeCluster(p.vertices, notTriangles, out).isOk());
     Patch huge = p;
-    huge.vertices[3].coordinate[1] = 1u << 24;
+    huge.vertices[3].coordinate[1] = 1u << 31;
     EXPECT_FALSE(encodeCluster(huge.vertices, huge.indices, out).isOk());
     std::vector<std::byte> small(8);
     EXPECT_FALSE(encodeCluster(p.vertices, p.indices, small).isOk());
@@ -288,7 +327,8 @@ TEST(ClusterCodecTest, BitFlipsAndGarbageNeverDecodeOutOfRange) {
 
 TEST(ClusterCodecTest, AGridNeedsFiniteBoundsAndBitsItCanHold) {
     EXPECT_FALSE(PositionGrid::covering(kLo, kHi, 0).isOk());
-    EXPECT_FALSE(PositionGrid::covering(kLo, kHi, 25).isOk());
+    EXPECT_FALSE(PositionGrid::covering(kLo, kHi, 32).isOk());
+    EXPECT_TRUE(PositionGrid::covering(kLo, kHi, 31).isOk());
     EXPECT_FALSE(PositionGrid::covering({0, 0, NAN}, kHi).isOk());
     EXPECT_FALSE(PositionGrid::covering(kHi, kLo).isOk());
     const auto flat = PositionGrid::covering({1, 1, 1}, {1, 1, 1});

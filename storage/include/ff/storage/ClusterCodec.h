@@ -23,10 +23,11 @@ namespace ff::storage {
 inline constexpr std::uint32_t kMaxClusterVertices = 255;
 inline constexpr std::uint32_t kMaxClusterTriangles = 512;
 
-/** Grid coordinates stay below 2^24 so that float(coordinate) is exact. */
-inline constexpr int kMaxPositionGridBits = 24;
-/** The builder's default: 2^20 steps across the prototype's largest extent (position error at
- *  most 1/2^21 of it, half a step). */
+/** Grid coordinates stay below 2^31 (a 10^9-triangle terrain at a thousandth of a triangle's
+ *  edge needs 26 bits). */
+inline constexpr int kMaxPositionGridBits = 31;
+/** `covering()`'s default: 2^20 steps across the prototype's largest extent (position error at
+ *  most 1/2^21 of it, half a step, plus float rounding). */
 inline constexpr int kDefaultPositionGridBits = 20;
 
 /** Normals are stored as octahedral codes of this many bits per component (PackedVertex keeps
@@ -35,8 +36,9 @@ inline constexpr int kClusterNormalBits = 12;
 
 /**
  * The quantization grid of one prototype: position = origin + step * coordinate, per axis, with
- * coordinates in [0, 2^bits). Computed in float the same way everywhere, so one coordinate always
- * decodes to one float.
+ * coordinates in [0, 2^bits), computed in double and rounded once to float, the same way
+ * everywhere: one coordinate always decodes to one float, so clusters sharing a vertex never
+ * crack.
  */
 struct PositionGrid {
     std::array<float, 3> origin{0.0f, 0.0f, 0.0f};
@@ -49,6 +51,11 @@ struct PositionGrid {
             std::array<float, 3> boundsMin,
             std::array<float, 3> boundsMax,
             int bits = kDefaultPositionGridBits);
+    /** The grid of steps `step` from boundsMin that covers boundsMax: as many bits as that
+     *  takes (an error if more than kMaxPositionGridBits). For a precision target in scene
+     *  units, whatever the extent. */
+    [[nodiscard]] static Result<PositionGrid>
+    withStep(std::array<float, 3> boundsMin, std::array<float, 3> boundsMax, float step);
 
     /** The nearest grid coordinate (clamped into the grid). */
     [[nodiscard]] std::array<std::uint32_t, 3>
@@ -88,7 +95,7 @@ encodedClusterBound(std::size_t vertexCount, std::size_t triangleCount) noexcept
 /**
  * Encodes one cluster into `out` (at least encodedClusterBound() bytes) and returns the bytes
  * written. `indices` are 3 per triangle, each below vertices.size(); 1-255 vertices, 1-512
- * triangles, coordinates below 2^24. Deterministic: the same input gives the same bytes.
+ * triangles, coordinates below 2^31. Deterministic: the same input gives the same bytes.
  * For the best compression, order triangles for the vertex cache and vertices by first use
  * (meshopt_optimizeVertexCache, meshopt_optimizeVertexFetch) before.
  */
