@@ -346,12 +346,15 @@ Status decodeVertices(
                 packed.data(), h.vertexCount, sizeof(Vertex), stream, h.vertexStreamBytes) != 0)
         return corrupt("vertex stream does not decode");
     const std::uint32_t limit = 1u << std::min(grid.bits, kMaxPositionGridBits);
+    // Checked once for the cluster after the loop, so the loop itself does not branch.
+    std::uint32_t largest = 0;
     for (std::size_t i = 0; i < h.vertexCount; ++i) {
         const std::array<std::uint32_t, 3> c = coordinateOf(packed[i], h.base);
-        if (c[0] >= limit || c[1] >= limit || c[2] >= limit)
-            return corrupt("vertex outside the position grid");
+        largest = std::max({largest, c[0], c[1], c[2]});
         out[i] = {dequantize(grid, c), decodeNormal12(packed[i].normal), packed[i].color};
     }
+    if (largest >= limit)
+        return corrupt("vertex outside the position grid");
     return Status::ok();
 }
 
