@@ -265,12 +265,20 @@ Result<DracoResult> measureDraco(const std::filesystem::path& path) {
             const auto ext = primitive.value("extensions", nlohmann::json::object());
             if (!ext.contains("KHR_draco_mesh_compression"))
                 continue;
-            const auto& view =
-                    doc["bufferViews"]
-                       [ext["KHR_draco_mesh_compression"]["bufferView"].get<std::size_t>()];
+            // gltf-pipeline's output, but still bytes from a file: every index checked.
+            const auto& draco = ext["KHR_draco_mesh_compression"];
+            const auto views = doc.value("bufferViews", nlohmann::json::array());
+            if (!draco.is_object() || !draco.contains("bufferView") ||
+                !draco["bufferView"].is_number_unsigned() ||
+                draco["bufferView"].get<std::size_t>() >= views.size() ||
+                !views[draco["bufferView"].get<std::size_t>()].is_object())
+                return Status(
+                        ErrorCode::Internal,
+                        path.string() + ": a Draco primitive without a valid bufferView");
+            const auto& view = views[draco["bufferView"].get<std::size_t>()];
             const std::size_t offset = binAt + view.value("byteOffset", std::size_t{0});
             const std::size_t length = view.value("byteLength", std::size_t{0});
-            if (offset + length > glb.size())
+            if (offset > glb.size() || length > glb.size() - offset)
                 return Status(
                         ErrorCode::Internal, path.string() + ": a Draco buffer past the file");
             buffers.emplace_back(offset, length);
