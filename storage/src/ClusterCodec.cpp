@@ -241,7 +241,7 @@ Result<std::size_t> encodeCluster(
             lo[a] = std::min(lo[a], v.coordinate[a]);
             hi[a] = std::max(hi[a], v.coordinate[a]);
         }
-    std::array<std::uint32_t, 512 * 3> wideIndices{};
+    std::array<std::uint32_t, kMaxClusterTriangles * 3> wideIndices{};
     for (std::size_t i = 0; i < indices.size(); ++i) {
         if (indices[i] >= vertices.size())
             return Status(ErrorCode::InvalidArgument, "cluster index past its vertices");
