@@ -39,7 +39,7 @@ Status runForest(const ForestParams& p, const Scenario& scenario, const BenchOpt
     // the corner tree, looking diagonally into the forest and over it to the horizon. The near
     // field is the same for every size; larger forests add trees ever further away (the
     // setting of the paper's Plate 5 and Fig. 5).
-    auto cornerCamera = [](const storage::SceneFile& file) {
+    auto cornerCamera = [](const storage::SceneIndex& file) {
         const glm::vec3 corner(file.header().boundsMin[0], 0.0f, file.header().boundsMin[2]);
         runtime::Camera c = runtime::Camera::lookAt(corner + glm::vec3(-12.0f, 18.0f, -12.0f),
                                                     corner + glm::vec3(30.0f, 2.0f, 30.0f), {0, 1, 0}, glm::radians(60.0f));
@@ -58,7 +58,7 @@ Status runForest(const ForestParams& p, const Scenario& scenario, const BenchOpt
         const std::filesystem::path scene = work / ("forest-" + std::to_string(trees) + ".ffs");
         FF_RETURN_IF_ERROR(buildGenerated("forest:trees=" + std::to_string(trees), scene));
         FF_ASSIGN_OR_RETURN(auto session, runtime::StreamingSession::open(scene));
-        const storage::SceneFile* file = &session->scene();
+        const storage::SceneIndex* file = &session->scene();
         const std::uint64_t triangles = file->header().instancedTriangles;
         const runtime::Camera camera = cornerCamera(*file);
 

@@ -41,7 +41,7 @@ struct PathParams {
 };
 
 /** The path in the scene file's frame (where sessions draw). */
-Result<runtime::CameraPath> makePath(const PathSpec& p, const storage::SceneFile& scene) {
+Result<runtime::CameraPath> makePath(const PathSpec& p, const storage::SceneIndex& scene) {
     const runtime::Bounds bounds = runtime::sceneBounds(scene);
     if (p.generator == "flythrough")
         return runtime::makeFlythroughPath(bounds, p.options);

@@ -38,7 +38,7 @@ Status runTable2(const Table2Params& p, const Scenario& scenario, const BenchOpt
     FF_RETURN_IF_ERROR(buildGenerated(p.generate, scene));
     FF_ASSIGN_OR_RETURN(auto context, runtime::OffscreenContext::create());
     FF_ASSIGN_OR_RETURN(auto session, runtime::StreamingSession::open(scene));
-    const storage::SceneFile* file = &session->scene();
+    const storage::SceneIndex* file = &session->scene();
     const runtime::Bounds bounds{{file->header().boundsMin[0], file->header().boundsMin[1], file->header().boundsMin[2]},
                                  {file->header().boundsMax[0], file->header().boundsMax[1], file->header().boundsMax[2]}};
 

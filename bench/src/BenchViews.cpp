@@ -266,7 +266,7 @@ Status runViews(const ViewsParams& p, const Scenario& scenario, const BenchOptio
                                    .status()
                                    .withContext(scenario.where()));
         FF_ASSIGN_OR_RETURN(auto session, runtime::StreamingSession::open(scenePath));
-        const storage::SceneFile* file = &session->scene();
+        const storage::SceneIndex* file = &session->scene();
         const std::string sceneTriangles = std::to_string(file->header().instancedTriangles);
         const std::string sceneBytes = std::to_string(std::filesystem::file_size(scenePath));
         if (sceneSummary.empty())

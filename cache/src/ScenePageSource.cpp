@@ -1,15 +1,17 @@
 #include <ff/cache/ScenePageSource.h>
 #include <ff/storage/PageCheck.h>
-#include <ff/storage/SceneFile.h>
+#include <ff/storage/SceneIndex.h>
 
 #include <fcntl.h>
 #include <sys/stat.h>
 #include <unistd.h>
 
+#include <array>
 #include <cerrno>
 #include <string>
 #include <system_error>
 #include <utility>
+#include <vector>
 
 namespace ff::cache {
 
@@ -22,30 +24,50 @@ Status ioError(int err, const std::string& what) {
 
 } // namespace
 
+/** Reads bytes [offset, offset + out.size()) or fewer at the end of the file; how many. */
+Result<std::size_t> readAt(int fd, std::uint64_t offset, std::span<std::byte> out, const std::string& what) {
+    std::size_t done = 0;
+    while (done < out.size()) {
+        const ssize_t n = ::pread(fd, out.data() + done, out.size() - done, static_cast<off_t>(offset + done));
+        if (n < 0) {
+            if (errno == EINTR)
+                continue;
+            return ioError(errno, what);
+        }
+        if (n == 0)
+            break;
+        done += static_cast<std::size_t>(n);
+    }
+    return done;
+}
+
 Result<std::unique_ptr<ScenePageSource>> ScenePageSource::open(const std::filesystem::path& path) {
     const std::string name = path.string();
-    // Our descriptor first, then the header check: should the path be replaced in between, the
-    // size check below or the per-page index and checksum catch it.
     const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
     if (fd < 0)
         return ioError(errno, "cannot open scene file " + name);
     std::unique_ptr<ScenePageSource> source(new ScenePageSource(path, fd, 0, 0));
 
-    auto file = storage::SceneFile::open(path);
-    if (!file.isOk())
-        return file.status().withContext(name);
-    source->mPageSize = (*file)->pageSize();
-    source->mPageCount = (*file)->pageCount();
-
     struct stat st {};
     if (::fstat(fd, &st) != 0)
         return ioError(errno, "cannot stat scene file " + name);
-    const std::uint64_t expected = source->mPageCount * source->mPageSize;
-    if (static_cast<std::uint64_t>(st.st_size) != expected)
-        return Status{
-                ErrorCode::Corrupt,
-                name + ": the file changed while being opened (" + std::to_string(st.st_size) +
-                        " bytes, the header says " + std::to_string(expected) + ")"};
+    if (!S_ISREG(st.st_mode))
+        return Status{ErrorCode::InvalidArgument, name + " is not a regular file"};
+    const auto fileSize = static_cast<std::uint64_t>(st.st_size);
+    const std::string what = "cannot read scene file " + name;
+
+    // The layout as the mapped reader learns it (storage::probePageSize, checkPageLayout), from
+    // our own descriptor: the per-page index and checksum catch a file replaced later.
+    std::array<std::byte, sizeof(storage::FileHeader)> start{};
+    FF_ASSIGN_OR_RETURN(const std::size_t got, readAt(fd, 0, start, what));
+    FF_ASSIGN_OR_RETURN(const std::uint32_t pageSize, storage::probePageSize(std::span(start).first(got), fileSize));
+    std::vector<std::byte> page0(pageSize);
+    FF_ASSIGN_OR_RETURN(const std::size_t got0, readAt(fd, 0, page0, what));
+    if (got0 != page0.size())
+        return Status{ErrorCode::Corrupt, name + ": the file changed while being opened"};
+    FF_ASSIGN_OR_RETURN(const storage::PageLayout layout, storage::checkPageLayout(page0, fileSize));
+    source->mPageSize = layout.pageSize;
+    source->mPageCount = layout.pageCount;
     return source;
 }
 

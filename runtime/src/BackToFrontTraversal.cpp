@@ -26,7 +26,7 @@ template <typename T> std::size_t capacityBytes(const std::vector<T>& v) {
 
 } // namespace
 
-BackToFrontTraversal::BackToFrontTraversal(const storage::SceneFile& scene, IPageAccess& pages)
+BackToFrontTraversal::BackToFrontTraversal(const storage::SceneIndex& scene, IPageAccess& pages)
     : mScene(scene)
     , mNodePages(std::make_unique<detail::NodePages>(scene, pages))
     , mPrototypeGeometry(scene.prototypes().size())
@@ -212,7 +212,7 @@ void BackToFrontTraversal::visit(
     // behind them.
     const std::size_t base = mChildStack.size();
     for (std::uint32_t c = 0; c < node.childCount; ++c) {
-        const storage::NodeRef childRef = storage::SceneFile::childRef(node, c);
+        const storage::NodeRef childRef = storage::SceneIndex::childRef(node, c);
         Result<storage::NodeRecord> child = mScene.decodeNode(childPage, childRef);
         if (!child) {
             mNodePages->reportFailure(child.status());
@@ -311,7 +311,7 @@ void BackToFrontTraversal::collectPrototypeGeometry(std::uint32_t prototype) {
             complete = false;
         for (std::uint32_t c = 0; c < node.childCount; ++c) {
             storage::NodeRecord child{};
-            if (mNodePages->readNode(storage::SceneFile::childRef(node, c), kTopPriority, child) ==
+            if (mNodePages->readNode(storage::SceneIndex::childRef(node, c), kTopPriority, child) ==
                 Fetch::Ready)
                 stack.push_back(child);
             else

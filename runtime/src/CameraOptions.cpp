@@ -11,7 +11,7 @@
 
 namespace ff::runtime {
 
-Result<std::vector<StoredCamera>> storedCameras(const storage::SceneFile& scene) {
+Result<std::vector<StoredCamera>> storedCameras(const storage::SceneIndex& scene) {
     const nlohmann::json metadata = nlohmann::json::parse(scene.metadataJson(), nullptr, false);
     if (!metadata.is_object() || !metadata.contains("cameras"))
         return std::vector<StoredCamera>();
@@ -57,17 +57,17 @@ Result<CameraPath> readCameraPath(const std::string& file) {
     return path;
 }
 
-Bounds sceneBounds(const storage::SceneFile& scene) {
+Bounds sceneBounds(const storage::SceneIndex& scene) {
     const auto& h = scene.header();
     return {{h.boundsMin[0], h.boundsMin[1], h.boundsMin[2]}, {h.boundsMax[0], h.boundsMax[1], h.boundsMax[2]}};
 }
 
-glm::dvec3 sceneOrigin(const storage::SceneFile& scene) {
+glm::dvec3 sceneOrigin(const storage::SceneIndex& scene) {
     const auto& o = scene.header().origin;
     return {o[0], o[1], o[2]};
 }
 
-Result<Camera> CameraOptions::resolve(const storage::SceneFile& scene) const {
+Result<Camera> CameraOptions::resolve(const storage::SceneIndex& scene) const {
     const Bounds bounds = sceneBounds(scene);
     const glm::dvec3 origin = sceneOrigin(scene);
     if (!(fovDegrees > 0.0f && fovDegrees < 179.0f))

@@ -12,7 +12,7 @@
 #include <ff/runtime/Selection.h>
 #include <ff/runtime/TransformMetric.h>
 #include <ff/runtime/Traversal.h>
-#include <ff/storage/SceneFile.h>
+#include <ff/storage/SceneIndex.h>
 
 #include <glm/glm.hpp>
 
@@ -112,7 +112,7 @@ enum class Fetch { Ready, Missing };
  */
 class NodePages {
 public:
-    NodePages(const storage::SceneFile& scene, IPageAccess& pages)
+    NodePages(const storage::SceneIndex& scene, IPageAccess& pages)
         : mScene(scene)
         , mPages(pages) {}
 
@@ -140,11 +140,11 @@ public:
 
     void reportFailure(const Status& failure);
     [[nodiscard]] const std::vector<Status>& newFailures() const noexcept { return mNewFailures; }
-    [[nodiscard]] const storage::SceneFile& scene() const noexcept { return mScene; }
+    [[nodiscard]] const storage::SceneIndex& scene() const noexcept { return mScene; }
     [[nodiscard]] FrameStats& stats() noexcept { return *mStats; }
 
 private:
-    const storage::SceneFile& mScene;
+    const storage::SceneIndex& mScene;
     IPageAccess& mPages;
     FrameStats* mStats = nullptr;
     std::unordered_set<std::string> mReported; ///< messages ("page N: ...") already reported

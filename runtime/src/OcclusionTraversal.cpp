@@ -155,7 +155,7 @@ struct OcclusionTraversal::Impl {
         NodeKey key;
     };
 
-    Impl(const storage::SceneFile& sceneFile, IPageAccess& pages)
+    Impl(const storage::SceneIndex& sceneFile, IPageAccess& pages)
         : scene(sceneFile)
         , nodePages(sceneFile, pages)
         , cubes(sceneFile, pages)
@@ -238,7 +238,7 @@ struct OcclusionTraversal::Impl {
     /** The queue's order: a max-heap on this is a min-heap on distance. */
     static bool farther(const Entry& a, const Entry& b) { return a.distance > b.distance; }
 
-    const storage::SceneFile& scene;
+    const storage::SceneIndex& scene;
     detail::NodePages nodePages;
     BackToFrontTraversal cubes; ///< pass 2
     std::unordered_map<NodeKey, History, NodeKeyHash> history;
@@ -288,7 +288,7 @@ struct OcclusionTraversal::Impl {
     std::vector<OcclusionBox> boxes;
 };
 
-OcclusionTraversal::OcclusionTraversal(const storage::SceneFile& scene, IPageAccess& pages)
+OcclusionTraversal::OcclusionTraversal(const storage::SceneIndex& scene, IPageAccess& pages)
     : mImpl(std::make_unique<Impl>(scene, pages)) {}
 OcclusionTraversal::~OcclusionTraversal() = default;
 
@@ -855,7 +855,7 @@ OcclusionTraversal::Impl::Expanded OcclusionTraversal::Impl::expandCell(
     // cube, as in the back-to-front walk.
     const std::size_t base = children.size();
     for (std::uint32_t c = 0; c < node.childCount; ++c) {
-        const storage::NodeRef childRef = storage::SceneFile::childRef(node, c);
+        const storage::NodeRef childRef = storage::SceneIndex::childRef(node, c);
         Result<storage::NodeRecord> record = scene.decodeNode(childPage, childRef);
         if (!record) {
             nodePages.reportFailure(record.status());

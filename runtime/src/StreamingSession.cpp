@@ -24,9 +24,9 @@ double millisecondsSince(std::chrono::steady_clock::time_point start) {
 }
 
 /** Counts the distinct pages read through the source: the unique bytes a session needed. */
-class CountingSource final : public cache::IPageSource {
+class CountingSource final : public storage::IPageSource {
 public:
-    explicit CountingSource(std::shared_ptr<cache::IPageSource> inner)
+    explicit CountingSource(std::shared_ptr<storage::IPageSource> inner)
         : mInner(std::move(inner)) {}
     std::uint32_t pageSize() const override { return mInner->pageSize(); }
     std::uint64_t pageCount() const override { return mInner->pageCount(); }
@@ -43,7 +43,7 @@ public:
     }
 
 private:
-    std::shared_ptr<cache::IPageSource> mInner;
+    std::shared_ptr<storage::IPageSource> mInner;
     mutable std::mutex mMutex;
     std::unordered_set<std::uint64_t> mPages;
 };
@@ -67,7 +67,11 @@ private:
 } // namespace
 
 struct StreamingSession::Impl {
-    std::unique_ptr<storage::SceneFile> scene;
+    /** Mapped sessions: the file, which is the scene index too. */
+    std::unique_ptr<storage::SceneFile> file;
+    /** Streaming sessions: the index, read through the page source. */
+    std::optional<storage::SceneIndex> streamedIndex;
+    const storage::SceneIndex* scene = nullptr; ///< one of the two
     std::shared_ptr<CountingSource> counting;
     std::unique_ptr<cache::PageCache> cache;
     std::unique_ptr<IPageAccess> pages;
@@ -87,6 +91,8 @@ struct StreamingSession::Impl {
     /** Where the frame's batches go instead of the renderer (the oracle's filter). */
     IDrawSink* sinkOverride = nullptr;
 
+    /** The traversals and the renderer, once `scene` and `pages` are set. */
+    Status startDrawing(const SessionOptions& options);
     /** pump → traverse → draw → finish → prefetch, inside one page-access frame. */
     template <typename Finish>
     Status
@@ -118,54 +124,71 @@ StreamingSession::~StreamingSession() = default;
 
 Result<std::unique_ptr<StreamingSession>>
 StreamingSession::open(const std::filesystem::path& scenePath, const SessionOptions& options) {
-    auto impl = std::make_unique<Impl>();
-    FF_ASSIGN_OR_RETURN(impl->scene, storage::SceneFile::open(scenePath));
-    const storage::SceneFile& scene = *impl->scene;
-    if (options.cacheBytes == 0) {
-        impl->pages = std::make_unique<MappedPageAccess>(scene);
-    } else {
-        const auto rootTooLarge = [&] {
-            return Status(
-                    ErrorCode::OutOfBudget,
-                    "--cache-mb " + std::to_string(options.cacheBytes >> 20) +
-                            " cannot hold the scene's root page (" +
-                            std::to_string(scene.pageSize() >> 10) + " KiB)");
-        };
-        if (options.cacheBytes < scene.pageSize())
-            return rootTooLarge();
+    if (options.cacheBytes > 0) {
         FF_ASSIGN_OR_RETURN(
                 std::unique_ptr<cache::ScenePageSource> source,
                 cache::ScenePageSource::open(scenePath));
-        impl->counting = std::make_shared<CountingSource>(std::move(source));
-        cache::PageCacheOptions cacheOptions;
-        cacheOptions.budgetBytes = options.cacheBytes;
-        cacheOptions.ioThreads = options.ioThreads;
-        cacheOptions.maxInFlight = std::max(cacheOptions.maxInFlight, options.maxInFlight);
-        // A frame that needs more than the budget keeps the cut it has instead of reading pages
-        // it can only drop (docs/methods.md, "At the budget's edge").
-        cacheOptions.readOnlyWhatFits = true;
-        FF_ASSIGN_OR_RETURN(impl->cache, cache::PageCache::create(impl->counting, cacheOptions));
-        const std::uint64_t rootPage = scene.header().root.page;
-        impl->cache->request(rootPage, 1e30f);
-        impl->cache->drain();
-        if (impl->cache->state(rootPage) == cache::PageState::Failed)
-            return impl->cache->failure(rootPage).value_or(
-                    Status(ErrorCode::IoError, "the root page is unreadable"));
-        if (impl->cache->state(rootPage) != cache::PageState::Resident)
-            return rootTooLarge();
-        auto cached = std::make_unique<CachedPageAccess>(*impl->cache, scene.pageSize());
-        impl->cachedPages = cached.get();
-        impl->pages = std::move(cached);
+        return open(std::shared_ptr<storage::IPageSource>(std::move(source)), options);
     }
-    impl->traversal = std::make_unique<BackToFrontTraversal>(scene, *impl->pages);
-    impl->occlusionTraversal = std::make_unique<OcclusionTraversal>(scene, *impl->pages);
-    impl->prefetchTraversal = std::make_unique<BackToFrontTraversal>(scene, *impl->pages);
-    impl->rendererOptions = options.renderer;
-    FF_ASSIGN_OR_RETURN(impl->renderer, Renderer::create(scene, options.renderer));
+    auto impl = std::make_unique<Impl>();
+    FF_ASSIGN_OR_RETURN(impl->file, storage::SceneFile::open(scenePath));
+    impl->scene = impl->file.get();
+    impl->pages = std::make_unique<MappedPageAccess>(*impl->file);
+    FF_RETURN_IF_ERROR(impl->startDrawing(options));
     return std::unique_ptr<StreamingSession>(new StreamingSession(std::move(impl)));
 }
 
-const storage::SceneFile& StreamingSession::scene() const noexcept {
+Result<std::unique_ptr<StreamingSession>>
+StreamingSession::open(std::shared_ptr<storage::IPageSource> source, const SessionOptions& options) {
+    FF_ASSERT(source != nullptr);
+    const auto rootTooLarge = [&] {
+        return Status(
+                ErrorCode::OutOfBudget,
+                "--cache-mb " + std::to_string(options.cacheBytes >> 20) +
+                        " cannot hold the scene's root page (" +
+                        std::to_string(source->pageSize() >> 10) + " KiB)");
+    };
+    if (options.cacheBytes < source->pageSize())
+        return rootTooLarge();
+    auto impl = std::make_unique<Impl>();
+    // The index before the cache: it is read once, at open, and stays outside the budget.
+    FF_ASSIGN_OR_RETURN(impl->streamedIndex, storage::SceneIndex::read(*source));
+    impl->scene = &*impl->streamedIndex;
+    const storage::SceneIndex& scene = *impl->scene;
+    impl->counting = std::make_shared<CountingSource>(std::move(source));
+    cache::PageCacheOptions cacheOptions;
+    cacheOptions.budgetBytes = options.cacheBytes;
+    cacheOptions.ioThreads = options.ioThreads;
+    cacheOptions.maxInFlight = std::max(cacheOptions.maxInFlight, options.maxInFlight);
+    // A frame that needs more than the budget keeps the cut it has instead of reading pages
+    // it can only drop (docs/methods.md, "At the budget's edge").
+    cacheOptions.readOnlyWhatFits = true;
+    FF_ASSIGN_OR_RETURN(impl->cache, cache::PageCache::create(impl->counting, cacheOptions));
+    const std::uint64_t rootPage = scene.header().root.page;
+    impl->cache->request(rootPage, 1e30f);
+    impl->cache->drain();
+    if (impl->cache->state(rootPage) == cache::PageState::Failed)
+        return impl->cache->failure(rootPage).value_or(
+                Status(ErrorCode::IoError, "the root page is unreadable"));
+    if (impl->cache->state(rootPage) != cache::PageState::Resident)
+        return rootTooLarge();
+    auto cached = std::make_unique<CachedPageAccess>(*impl->cache, scene.pageSize());
+    impl->cachedPages = cached.get();
+    impl->pages = std::move(cached);
+    FF_RETURN_IF_ERROR(impl->startDrawing(options));
+    return std::unique_ptr<StreamingSession>(new StreamingSession(std::move(impl)));
+}
+
+Status StreamingSession::Impl::startDrawing(const SessionOptions& options) {
+    traversal = std::make_unique<BackToFrontTraversal>(*scene, *pages);
+    occlusionTraversal = std::make_unique<OcclusionTraversal>(*scene, *pages);
+    prefetchTraversal = std::make_unique<BackToFrontTraversal>(*scene, *pages);
+    rendererOptions = options.renderer;
+    FF_ASSIGN_OR_RETURN(renderer, Renderer::create(*scene, options.renderer));
+    return Status::ok();
+}
+
+const storage::SceneIndex& StreamingSession::scene() const noexcept {
     return *mImpl->scene;
 }
 bool StreamingSession::streams() const noexcept {

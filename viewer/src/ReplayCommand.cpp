@@ -105,7 +105,7 @@ int runReplay(const ReplayArgs& args) {
     if (!session)
         return reportError("replay", session.status().withContext(args.scene));
     runtime::StreamingSession& streaming = **session;
-    const storage::SceneFile& scene = streaming.scene();
+    const storage::SceneIndex& scene = streaming.scene();
     std::unique_ptr<runtime::StreamingSession> complete; // everything resident: the error reference
     if (args.error) {
         runtime::SessionOptions mapped;

@@ -186,7 +186,7 @@ Renderer::Renderer(std::unique_ptr<Impl> impl) : mImpl(std::move(impl)) {}
 Renderer::~Renderer() = default;
 
 
-Result<std::unique_ptr<Renderer>> Renderer::create(const storage::SceneFile& scene, const RendererOptions& options) {
+Result<std::unique_ptr<Renderer>> Renderer::create(const storage::SceneIndex& scene, const RendererOptions& options) {
     auto impl = std::make_unique<Impl>();
     impl->options = options;
     FF_ASSIGN_OR_RETURN(impl->geometryProgram, linkGlProgram({gl::kGeometryVertexShader}, gl::kGeometryFragmentShader));

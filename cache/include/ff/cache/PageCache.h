@@ -27,6 +27,7 @@
 // it runs there. The cache owns options.ioThreads I/O threads, which share only the request
 // queue and the completion queue with it (under one mutex) and never touch the resident set.
 
+#include <ff/storage/PageSource.h>
 #include <ff/storage/Status.h>
 
 #include <cstddef>
@@ -37,15 +38,8 @@
 
 namespace ff::cache {
 
-/** Where pages come from. Implementations must be safe to call from several threads at once. */
-class IPageSource {
-public:
-    virtual ~IPageSource() = default;
-    virtual std::uint32_t pageSize() const = 0;
-    virtual std::uint64_t pageCount() const = 0;
-    /** Reads and verifies page `index` into `out` (pageSize bytes). Called on I/O threads. */
-    [[nodiscard]] virtual Status readPage(std::uint64_t index, std::span<std::byte> out) = 0;
-};
+/** Where pages come from (storage/PageSource.h): the cache reads through it on I/O threads. */
+using storage::IPageSource;
 
 struct PageCacheOptions {
     std::uint64_t budgetBytes = 256ull << 20; ///< hard limit on resident page bytes

@@ -14,19 +14,21 @@
 namespace ff::cache {
 
 /**
- * The pages of one scene file (.ffs), read with pread() from the source's own descriptor and
- * verified exactly as storage::SceneFile verifies them (trailer magic, XXH3-64 checksum, page
- * index; storage::verifyPageBytes). The page type is not checked: the reader of the bytes knows
- * what it expects.
+ * The pages of one scene file (.ffs) on a local disk, read with pread() from the source's own
+ * descriptor (no mapping) and verified exactly as storage::SceneFile verifies them (trailer
+ * magic, XXH3-64 checksum, page index; storage::verifyPageBytes). The page type is not checked:
+ * the reader of the bytes knows what it expects. storage::SceneIndex::read() reads the scene's
+ * header and tables through it.
  *
  * Thread-safety: readPage() may be called from any number of threads at once (pread does not
  * move a shared file offset); the other methods are const and immutable after open().
  */
 class ScenePageSource final : public IPageSource {
 public:
-    /** Opens `path` and checks its header page through storage::SceneFile (page size, page
-     *  count, struct sizes). Errors: those of SceneFile::open (NotFound, IoError, Corrupt,
-     *  Unsupported), prefixed with the path. */
+    /** Opens `path` and learns its page layout from the header page (storage::probePageSize,
+     *  storage::checkPageLayout: magic, version, page size, checksum, page count against the
+     *  file's size). Errors: NotFound, IoError (naming the path), Corrupt "page N: ...",
+     *  Unsupported: as storage::SceneFile::open words them. */
     [[nodiscard]] static Result<std::unique_ptr<ScenePageSource>>
     open(const std::filesystem::path& path);
 

@@ -4,7 +4,7 @@
 #include <ff/runtime/PageAccess.h>
 #include <ff/runtime/TransformMetric.h>
 #include <ff/runtime/Traversal.h>
-#include <ff/storage/SceneFile.h>
+#include <ff/storage/SceneIndex.h>
 
 #include <cstdint>
 #include <memory>
@@ -40,7 +40,7 @@ namespace ff::runtime {
  */
 class BackToFrontTraversal final : public ITraversal {
 public:
-    BackToFrontTraversal(const storage::SceneFile& scene, IPageAccess& pages);
+    BackToFrontTraversal(const storage::SceneIndex& scene, IPageAccess& pages);
     ~BackToFrontTraversal() override;
 
     [[nodiscard]] Status
@@ -89,7 +89,7 @@ private:
     void walkFull();
     void collectPrototypeGeometry(std::uint32_t prototype);
 
-    const storage::SceneFile& mScene;
+    const storage::SceneIndex& mScene;
     std::unique_ptr<detail::NodePages> mNodePages;
     bool mCubesOnly = false;
     // Per-frame state.

@@ -2,7 +2,7 @@
 
 #include <ff/runtime/Camera.h>
 #include <ff/runtime/CameraPath.h>
-#include <ff/storage/SceneFile.h>
+#include <ff/storage/SceneIndex.h>
 #include <ff/storage/Status.h>
 
 #include <cstdint>
@@ -27,15 +27,15 @@ struct CameraOptions {
     std::int64_t pathFrame = -1; ///< frame of `path`; -1 = not given (frame 0)
 
     /** Resolves the flags against the scene (bounds, stored glTF cameras, camera path). */
-    [[nodiscard]] Result<Camera> resolve(const storage::SceneFile& scene) const;
+    [[nodiscard]] Result<Camera> resolve(const storage::SceneIndex& scene) const;
 };
 
 /** Bounds of a scene file, in its own frame (where the runtime draws). */
-Bounds sceneBounds(const storage::SceneFile& scene);
+Bounds sceneBounds(const storage::SceneIndex& scene);
 
 /** World position of the scene file frame's origin (storage/FORMAT.md "The file frame"): world
  *  coordinates the user gives (--eye, camera paths, glTF cameras) minus this are file frame. */
-glm::dvec3 sceneOrigin(const storage::SceneFile& scene);
+glm::dvec3 sceneOrigin(const storage::SceneIndex& scene);
 
 /** A camera of the source glTF, as the builder stored it in the scene's metadata ("cameras"). */
 struct StoredCamera {
@@ -50,7 +50,7 @@ struct StoredCamera {
 
 /** The scene's stored glTF cameras in glTF order; empty if it has none (e.g. generated scenes).
  *  Corrupt if an entry is malformed. */
-[[nodiscard]] Result<std::vector<StoredCamera>> storedCameras(const storage::SceneFile& scene);
+[[nodiscard]] Result<std::vector<StoredCamera>> storedCameras(const storage::SceneIndex& scene);
 
 /** Reads and validates a camera path file; errors name the file. */
 [[nodiscard]] Result<CameraPath> readCameraPath(const std::string& file);

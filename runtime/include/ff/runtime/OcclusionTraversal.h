@@ -2,7 +2,7 @@
 
 #include <ff/runtime/PageAccess.h>
 #include <ff/runtime/Traversal.h>
-#include <ff/storage/SceneFile.h>
+#include <ff/storage/SceneIndex.h>
 
 #include <cstddef>
 #include <memory>
@@ -47,7 +47,7 @@ namespace ff::runtime {
  */
 class OcclusionTraversal final : public ITraversal {
 public:
-    OcclusionTraversal(const storage::SceneFile& scene, IPageAccess& pages);
+    OcclusionTraversal(const storage::SceneIndex& scene, IPageAccess& pages);
     ~OcclusionTraversal() override;
     OcclusionTraversal(const OcclusionTraversal&) = delete;
     OcclusionTraversal& operator=(const OcclusionTraversal&) = delete;

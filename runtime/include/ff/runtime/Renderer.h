@@ -6,7 +6,7 @@
 #include <ff/runtime/Image.h>
 #include <ff/runtime/FrameContext.h>
 #include <ff/runtime/Traversal.h>
-#include <ff/storage/SceneFile.h>
+#include <ff/storage/SceneIndex.h>
 #include <ff/storage/Status.h>
 
 #include <glm/glm.hpp>
@@ -54,7 +54,7 @@ enum class FrameOutput {
 class Renderer final : public IDrawSink, public IUploadGate, public IOcclusionTester {
 public:
     [[nodiscard]] static Result<std::unique_ptr<Renderer>> create(
-            const storage::SceneFile& scene, const RendererOptions& options = {});
+            const storage::SceneIndex& scene, const RendererOptions& options = {});
     ~Renderer() override;
     Renderer(const Renderer&) = delete;
     Renderer& operator=(const Renderer&) = delete;

@@ -13,9 +13,11 @@
 //                          reads)                   IUploadGate)                 quarter priority)
 //
 // Layers of page access, bottom up: IPageSource is where page bytes come from (a file today;
-// HTTP ranges or object storage next), PageCache keeps a budgeted resident set of them filled by
-// background reads, IPageAccess is what one frame sees of pages (Ready, Pending or Failed, never
-// a wait). The session owns all of them, so nothing outside runtime/ names the cache.
+// HTTP ranges or object storage next: open(source) takes any), PageCache keeps a budgeted
+// resident set of them filled by background reads, IPageAccess is what one frame sees of pages
+// (Ready, Pending or Failed, never a wait). The scene index (header and tables) is read through
+// the source too, once, at open. The session owns all of them, so nothing outside runtime/
+// names the cache.
 
 #include <ff/runtime/Camera.h>
 #include <ff/runtime/FrameContext.h>
@@ -23,7 +25,8 @@
 #include <ff/runtime/FrameTelemetry.h>
 #include <ff/runtime/Image.h>
 #include <ff/runtime/Renderer.h>
-#include <ff/storage/SceneFile.h>
+#include <ff/storage/PageSource.h>
+#include <ff/storage/SceneIndex.h>
 #include <ff/storage/Status.h>
 
 #include <cstdint>
@@ -82,11 +85,21 @@ public:
      */
     [[nodiscard]] static Result<std::unique_ptr<StreamingSession>>
     open(const std::filesystem::path& scenePath, const SessionOptions& options = {});
+    /**
+     * Streams the scene `source` serves (a file, a range server, ...): the scene index is read
+     * through it (storage::SceneIndex::read), then every page through the budgeted cache, the
+     * root's page resident before returning. Needs options.cacheBytes > 0 (OutOfBudget below
+     * one page); errors as above.
+     */
+    [[nodiscard]] static Result<std::unique_ptr<StreamingSession>>
+    open(std::shared_ptr<storage::IPageSource> source, const SessionOptions& options);
     ~StreamingSession();
     StreamingSession(const StreamingSession&) = delete;
     StreamingSession& operator=(const StreamingSession&) = delete;
 
-    const storage::SceneFile& scene() const noexcept;
+    /** The scene's header and tables (a SceneFile when mapped; read through the source when
+     *  streaming). */
+    const storage::SceneIndex& scene() const noexcept;
     /** Pages come through a budgeted cache (else every page is mapped). */
     bool streams() const noexcept;
 
