@@ -25,7 +25,7 @@ constexpr std::uint64_t kNeverUsed = std::numeric_limits<std::uint64_t>::max();
 /** A finished read on its way from an I/O thread to the main thread. */
 struct Completion {
     std::uint64_t page = 0;
-    std::unique_ptr<std::byte[]> bytes; ///< pageSize bytes; null when `status` is an error
+    PageBuffer bytes; ///< as read, or decoded; empty when `status` is an error
     Status status;
 };
 
@@ -43,9 +43,28 @@ struct SharedQueues {
     bool stopping = false;
 };
 
-/** One I/O thread: take the highest-priority request, read it outside the lock, hand it over. */
-void runIoThread(SharedQueues& shared, IPageSource& source) {
+/** Reads page `page` and, with a decoder, decodes it: what one worker does outside the lock. */
+Completion readAndDecode(std::uint64_t page, IPageSource& source, IPageDecoder* decoder) {
     const std::size_t pageSize = source.pageSize();
+    Completion done{page, {std::make_unique_for_overwrite<std::byte[]>(pageSize), pageSize}, Status::ok()};
+    done.status = source.readPage(page, {done.bytes.bytes.get(), pageSize});
+    if (done.status.isOk() && decoder != nullptr) {
+        done.status = decoder->decode(page, done.bytes);
+        const std::size_t most = decoder->maxDecodedBytes(source.pageSize());
+        if (done.status.isOk() && (done.bytes.bytes == nullptr || done.bytes.size > most))
+            done.status = Status(
+                    ErrorCode::Internal,
+                    "page " + std::to_string(page) + ": decoded to " + std::to_string(done.bytes.size) +
+                            " bytes, the decoder promised at most " + std::to_string(most));
+    }
+    if (!done.status.isOk())
+        done.bytes = {};
+    return done;
+}
+
+/** One worker thread: take the highest-priority request, read and decode it outside the lock,
+ *  hand it over. */
+void runIoThread(SharedQueues& shared, IPageSource& source, IPageDecoder* decoder) {
     std::unique_lock lock(shared.mutex);
     for (;;) {
         shared.workAvailable.wait(
@@ -56,14 +75,11 @@ void runIoThread(SharedQueues& shared, IPageSource& source) {
         ++shared.running;
         lock.unlock();
 
-        auto bytes = std::make_unique_for_overwrite<std::byte[]>(pageSize);
-        Status status = source.readPage(page, {bytes.get(), pageSize});
-        if (!status.isOk())
-            bytes.reset();
+        Completion done = readAndDecode(page, source, decoder);
 
         lock.lock();
         --shared.running;
-        shared.completions.push_back({page, std::move(bytes), std::move(status)});
+        shared.completions.push_back(std::move(done));
         shared.readFinished.notify_all();
     }
 }
@@ -71,7 +87,7 @@ void runIoThread(SharedQueues& shared, IPageSource& source) {
 /** Main-thread bookkeeping of one page that is not Absent. */
 struct PageEntry {
     PageState state = PageState::Absent;
-    std::unique_ptr<std::byte[]> bytes;   ///< Resident: the page
+    PageBuffer bytes;                     ///< Resident: the page as kept
     std::uint64_t usedFrame = kNeverUsed; ///< Resident: last frame whose tryGet() returned it
     Status failure;                       ///< Failed: why
 };
@@ -82,6 +98,8 @@ struct PageCache::Impl {
     std::shared_ptr<IPageSource> source;
     PageCacheOptions options;
     std::uint32_t pageSize = 0;
+    /** The most one resident page takes: pageSize, or what the decoder may make of one. */
+    std::uint64_t maxPageBytes = 0;
     std::uint64_t pageCount = 0;
     std::thread::id owner = std::this_thread::get_id();
 
@@ -113,23 +131,23 @@ struct PageCache::Impl {
 
     bool onOwnerThread() const { return std::this_thread::get_id() == owner; }
 
-    /** Where eviction aims when a completion needs room: (1 - hysteresis) x budget after the
-     *  install, but never less room than the one page being installed. */
-    std::uint64_t lowWater() const {
+    /** Where eviction aims when a completion of `bytes` needs room: (1 - hysteresis) x budget
+     *  after the install, but never less room than the one page being installed. */
+    std::uint64_t lowWater(std::uint64_t bytes) const {
         const std::uint64_t budget = options.budgetBytes;
         const auto lowBudget = static_cast<std::uint64_t>(
                 static_cast<double>(budget) * (1.0 - options.hysteresis));
         const std::uint64_t afterInstall = std::min(lowBudget, budget);
-        return afterInstall >= pageSize ? afterInstall - pageSize : 0;
+        return afterInstall >= bytes ? afterInstall - bytes : 0;
     }
 
     void evict(std::uint64_t page) {
         const auto it = entries.find(page);
         FF_ASSERT(it != entries.end() && it->second.state == PageState::Resident);
         FF_ASSERT(it->second.usedFrame != frame);
+        stats.residentBytes -= it->second.bytes.size;
         entries.erase(it);
         lru.erase(page);
-        stats.residentBytes -= pageSize;
         ++stats.evicted;
     }
 
@@ -162,23 +180,26 @@ struct PageCache::Impl {
             return false;
         }
         stats.bytesRead += pageSize;
+        const std::uint64_t bytes = done.bytes.size;
+        if (options.decoder != nullptr)
+            stats.bytesDecoded += bytes;
         const std::uint64_t budget = options.budgetBytes;
-        if (stats.residentBytes + pageSize > budget) {
+        if (stats.residentBytes + bytes > budget) {
             // Decide before evicting anything: a page that cannot fit even after evicting every
             // page the current frame does not use is dropped, and nothing is evicted for it.
-            if (frameBytes + pageSize > budget) {
+            if (frameBytes + bytes > budget) {
                 entries.erase(it);
                 ++stats.dropped;
                 return false;
             }
-            evictDownTo(std::min(lowWater(), budget - pageSize));
+            evictDownTo(std::min(lowWater(bytes), budget - bytes));
         }
-        FF_ASSERT(stats.residentBytes + pageSize <= budget);
+        FF_ASSERT(stats.residentBytes + bytes <= budget);
         entry.state = PageState::Resident;
         entry.bytes = std::move(done.bytes);
         entry.usedFrame = kNeverUsed;
         lru.touch(done.page);
-        stats.residentBytes += pageSize;
+        stats.residentBytes += bytes;
         stats.peakResidentBytes = std::max(stats.peakResidentBytes, stats.residentBytes);
         ++stats.completed;
         return true;
@@ -195,11 +216,14 @@ PageCache::create(std::shared_ptr<IPageSource> source, const PageCacheOptions& o
     FF_ASSERT(source != nullptr);
     const std::uint32_t pageSize = source->pageSize();
     FF_ASSERT(pageSize > 0);
-    if (options.budgetBytes < pageSize)
+    const std::uint64_t maxPageBytes =
+            options.decoder ? std::max<std::uint64_t>(options.decoder->maxDecodedBytes(pageSize), pageSize) : pageSize;
+    if (options.budgetBytes < maxPageBytes)
         return Status{
                 ErrorCode::InvalidArgument,
                 "page cache budget of " + std::to_string(options.budgetBytes) +
-                        " bytes cannot hold one page of " + std::to_string(pageSize) + " bytes"};
+                        " bytes cannot hold one page of " + std::to_string(maxPageBytes) +
+                        (maxPageBytes > pageSize ? " bytes decoded" : " bytes")};
     if (options.ioThreads == 0)
         return Status{ErrorCode::InvalidArgument, "page cache needs at least one I/O thread"};
     if (options.maxInFlight == 0)
@@ -214,12 +238,15 @@ PageCache::create(std::shared_ptr<IPageSource> source, const PageCacheOptions& o
     impl->source = source;
     impl->options = options;
     impl->pageSize = pageSize;
+    impl->maxPageBytes = maxPageBytes;
     impl->pageCount = source->pageCount();
     impl->ioThreads.reserve(options.ioThreads);
     const std::shared_ptr<SharedQueues> shared = impl->shared;
     try {
         for (unsigned i = 0; i < options.ioThreads; ++i)
-            impl->ioThreads.emplace_back([shared, source] { runIoThread(*shared, *source); });
+            impl->ioThreads.emplace_back([shared, source, decoder = options.decoder] {
+                runIoThread(*shared, *source, decoder.get());
+            });
     } catch (const std::system_error& error) {
         // ~Impl stops and joins the threads already started.
         return Status{
@@ -253,12 +280,12 @@ std::optional<std::span<const std::byte>> PageCache::tryGet(std::uint64_t page, 
     const bool first = entry.usedFrame != m.frame;
     if (first) {
         entry.usedFrame = m.frame;
-        m.frameBytes += m.pageSize;
+        m.frameBytes += entry.bytes.size;
     }
     if (firstUse)
         *firstUse = first;
     m.lru.touch(page);
-    return std::span<const std::byte>(entry.bytes.get(), m.pageSize);
+    return entry.bytes.view();
 }
 
 void PageCache::request(std::uint64_t page, float priority) {
@@ -287,7 +314,7 @@ void PageCache::request(std::uint64_t page, float priority) {
     }
     // Room for one more read beside what the frames hold: a still or slowly moving camera uses
     // about what it used last frame, so that is claimed too, not only what this frame has used so far.
-    const std::uint64_t claimed = std::max(m.previousFrameBytes, m.frameBytes) + (m.inFlight + 1) * m.pageSize;
+    const std::uint64_t claimed = std::max(m.previousFrameBytes, m.frameBytes) + (m.inFlight + 1) * m.maxPageBytes;
     const bool noRoom = m.options.readOnlyWhatFits && claimed > m.options.budgetBytes;
     {
         std::lock_guard lock(m.shared->mutex);
@@ -387,10 +414,14 @@ std::uint64_t PageCache::budgetBytes() const noexcept {
     return mImpl->options.budgetBytes;
 }
 
+std::uint64_t PageCache::maxPageBytes() const noexcept {
+    return mImpl->maxPageBytes;
+}
+
 void PageCache::setBudget(std::uint64_t bytes) {
     Impl& m = *mImpl;
     FF_ASSERT(m.onOwnerThread());
-    FF_ASSERT(bytes >= m.pageSize);
+    FF_ASSERT(bytes >= m.maxPageBytes);
     m.options.budgetBytes = bytes;
     if (m.stats.residentBytes > bytes)
         m.evictDownTo(bytes);

@@ -4,9 +4,8 @@
 
 namespace ff::runtime {
 
-CachedPageAccess::CachedPageAccess(cache::PageCache& cache, std::uint32_t pageSize)
-    : mCache(cache)
-    , mPageSize(pageSize) {}
+CachedPageAccess::CachedPageAccess(cache::PageCache& cache)
+    : mCache(cache) {}
 
 void CachedPageAccess::beginFrame() {
     mCache.beginFrame();
@@ -21,8 +20,11 @@ PageLookup CachedPageAccess::lookup(std::uint64_t page, storage::PageType type, 
     bool firstUse = false;
     if (const auto bytes = mCache.tryGet(page, &firstUse)) {
         // The cache verified the checksum and the page's own index; the type is ours to check.
+        // A page as kept ends with its trailer, decoded or not (a decoder keeps it there).
+        FF_ASSERT(bytes->size() >= sizeof(storage::PageTrailer));
+        const std::size_t payloadBytes = bytes->size() - sizeof(storage::PageTrailer);
         storage::PageTrailer trailer{};
-        std::memcpy(&trailer, bytes->data() + storage::pagePayloadBytes(mPageSize), sizeof(trailer));
+        std::memcpy(&trailer, bytes->data() + payloadBytes, sizeof(trailer));
         if (trailer.pageType != static_cast<std::uint16_t>(type)) {
             const auto [it, inserted] = mFailures.emplace(
                     failureKey(page, type), Status(ErrorCode::Corrupt, "page " + std::to_string(page) + ": page type " +
@@ -34,7 +36,7 @@ PageLookup CachedPageAccess::lookup(std::uint64_t page, storage::PageType type, 
             ++mFrameUse.nodePages;
         else if (firstUse && type == storage::PageType::Geometry)
             ++mFrameUse.geometryPages;
-        return {PageAvailability::Ready, bytes->first(storage::pagePayloadBytes(mPageSize)), nullptr};
+        return {PageAvailability::Ready, bytes->first(payloadBytes), nullptr};
     }
     if (mCache.state(page) == cache::PageState::Failed) {
         const auto [it, inserted] = mFailures.emplace(failureKey(page, type), mCache.failure(page).value_or(

@@ -24,7 +24,7 @@ struct FramePageUse {
  */
 class CachedPageAccess final : public IPageAccess {
 public:
-    CachedPageAccess(cache::PageCache& cache, std::uint32_t pageSize);
+    explicit CachedPageAccess(cache::PageCache& cache);
 
     void beginFrame() override;
     [[nodiscard]] PageLookup lookup(std::uint64_t page, storage::PageType type, float priority) override;
@@ -37,7 +37,6 @@ public:
 
 private:
     cache::PageCache& mCache;
-    std::uint32_t mPageSize;
     std::unordered_map<std::uint64_t, Status> mFailures;
     FramePageUse mFrameUse;
 };

@@ -172,7 +172,7 @@ StreamingSession::open(std::shared_ptr<storage::IPageSource> source, const Sessi
                 Status(ErrorCode::IoError, "the root page is unreadable"));
     if (impl->cache->state(rootPage) != cache::PageState::Resident)
         return rootTooLarge();
-    auto cached = std::make_unique<CachedPageAccess>(*impl->cache, scene.pageSize());
+    auto cached = std::make_unique<CachedPageAccess>(*impl->cache);
     impl->cachedPages = cached.get();
     impl->pages = std::move(cached);
     FF_RETURN_IF_ERROR(impl->startDrawing(options));
@@ -481,7 +481,7 @@ void StreamingSession::setPrefetchCamera(std::optional<Camera> camera) {
 
 void StreamingSession::setCacheBudget(std::uint64_t bytes) {
     if (mImpl->cache)
-        mImpl->cache->setBudget(std::max<std::uint64_t>(bytes, mImpl->scene->pageSize()));
+        mImpl->cache->setBudget(std::max(bytes, mImpl->cache->maxPageBytes()));
 }
 
 Status StreamingSession::setGpuBudget(std::uint64_t bytes) {

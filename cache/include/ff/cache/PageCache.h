@@ -10,11 +10,13 @@
 //                 frame -> pump(maxCompletions): moves finished reads into the resident set,
 //                 evicting least-recently-used pages not used by the current frame.
 //   I/O threads:  take the highest-priority queued request, read it through IPageSource into
-//                 a buffer, verify it, and hand it to the completion queue. They never touch
-//                 the resident set.
+//                 a buffer, verify it, decode it (options.decoder, PageDecoder.h: the decode
+//                 stage, on these threads, never on the main thread) and hand it to the
+//                 completion queue. They never touch the resident set.
 //
-// Budget: resident bytes (pages handed out by tryGet and kept) never exceed budgetBytes; reads
-// in flight hold their own buffers, bounded by maxInFlight pages. A request the budget has no
+// Budget: resident bytes (pages as kept — decoded, with a decoder — handed out by tryGet and
+// kept) never exceed budgetBytes; reads in flight hold their own buffers, bounded by maxInFlight
+// pages of at most maxDecodedBytes each. A request the budget has no
 // room for beside the frames' pages is not read (readOnlyWhatFits); a completion that cannot
 // fit without evicting a page the current frame uses is dropped (and counted), never forced in.
 // The one exception is setBudget() below the bytes the current frame holds: see there.
@@ -27,6 +29,7 @@
 // it runs there. The cache owns options.ioThreads I/O threads, which share only the request
 // queue and the completion queue with it (under one mutex) and never touch the resident set.
 
+#include <ff/cache/PageDecoder.h>
 #include <ff/storage/PageSource.h>
 #include <ff/storage/Status.h>
 
@@ -63,6 +66,10 @@ struct PageCacheOptions {
      *  cache reads what it is asked for), a completion without room is dropped instead; the
      *  viewer's streaming sessions turn it on. */
     bool readOnlyWhatFits = false;
+    /** The decode stage: what each page becomes on the I/O thread that read it before it is
+     *  kept (null: pages are kept as read). The budget counts the decoded bytes; a read in
+     *  flight is counted at the decoder's maxDecodedBytes until it is installed. */
+    std::shared_ptr<IPageDecoder> decoder;
 };
 
 enum class PageState { Resident, Pending, Failed, Absent };
@@ -81,6 +88,7 @@ struct PageCacheStats {
     std::uint64_t failed = 0;    ///< pages that failed (I/O or checksum), each counted once
     std::uint64_t evicted = 0;
     std::uint64_t bytesRead = 0;
+    std::uint64_t bytesDecoded = 0; ///< bytes the decoder made of the pages read (0 without one)
     std::uint64_t residentBytes = 0;
     std::uint64_t peakResidentBytes = 0;
     std::uint64_t inFlight = 0; ///< requests queued, being read or waiting for pump()
@@ -95,7 +103,7 @@ struct PageCacheStats {
 class PageCache {
 public:
     /** Starts the I/O threads. Errors: InvalidArgument when the budget cannot hold even one
-     *  page, or when ioThreads or maxInFlight is 0 or hysteresis is outside [0, 1). */
+     *  page (maxPageBytes()), or when ioThreads or maxInFlight is 0 or hysteresis is outside [0, 1). */
     [[nodiscard]] static Result<std::unique_ptr<PageCache>>
     create(std::shared_ptr<IPageSource> source, const PageCacheOptions& options);
     ~PageCache();
@@ -105,7 +113,8 @@ public:
     /** Starts a frame: pages used by the previous frame become evictable again (and, after a
      *  setBudget() below them, are evicted down to the budget now). */
     void beginFrame();
-    /** The bytes of a resident page, marked used by this frame (not evictable until the next
+    /** The bytes of a resident page as kept (as read: pageSize bytes; else what the decoder
+     *  made of them), marked used by this frame (not evictable until the next
      *  beginFrame). The span stays valid until then. Counts a hit or a miss. When the page is
      *  resident and `firstUse` is given, *firstUse tells whether this is the frame's first
      *  tryGet of it (callers count the distinct pages a frame used). */
@@ -131,7 +140,10 @@ public:
 
     const PageCacheStats& stats() const noexcept;
     std::uint64_t budgetBytes() const noexcept;
-    /** Changes the budget (at least one page: asserted), evicting as needed, never pages used
+    /** The most bytes one resident page takes: the source's page size, or the decoder's
+     *  maxDecodedBytes. */
+    std::uint64_t maxPageBytes() const noexcept;
+    /** Changes the budget (at least maxPageBytes(): asserted), evicting as needed, never pages used
      *  by the current frame. Should those alone exceed the new budget, residentBytes stays
      *  above budgetBytes until the next beginFrame(), which evicts down to it; no completion is
      *  installed meanwhile. This is the only time residentBytes > budgetBytes. */

@@ -21,7 +21,9 @@ enum class PageAvailability {
 
 struct PageLookup {
     PageAvailability availability = PageAvailability::Pending;
-    std::span<const std::byte> payload; ///< Ready: pagePayloadBytes(pageSize) bytes
+    /** Ready: the page's payload, its trailer cut off: pagePayloadBytes(pageSize) bytes as
+     *  read, or what the cache's decoder made of them. */
+    std::span<const std::byte> payload;
     const Status* failure = nullptr;    ///< Failed: the reason, owned by the IPageAccess
 };
 
