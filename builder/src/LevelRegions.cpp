@@ -15,14 +15,19 @@ constexpr std::size_t kSpillBufferBytes = 64u << 10;
 
 } // namespace
 
-LevelRegions::Region::Region(const std::filesystem::path& recordPath) : records(recordPath) {
+LevelRegions::Region::Region(const std::filesystem::path& recordPath, SpillCodec codec) : records(recordPath, codec) {
     records.setBufferLimit(kSpillBufferBytes);
 }
 
 LevelRegions::LevelRegions(
-        storage::SceneWriter& writer, std::filesystem::path directory, std::string prefix, std::uint64_t extentBytes)
+        storage::SceneWriter& writer,
+        std::filesystem::path directory,
+        SpillCodec codec,
+        std::string prefix,
+        std::uint64_t extentBytes)
     : mWriter(writer)
     , mDirectory(std::move(directory))
+    , mCodec(codec)
     , mPrefix(std::move(prefix))
     , mPageSize(writer.pageSize())
     , mExtentTriangles(std::max<std::uint64_t>(extentBytes / mPageSize, 1) * storage::trianglesPerPage(mPageSize)) {}
@@ -30,7 +35,7 @@ LevelRegions::LevelRegions(
 LevelRegions::Region& LevelRegions::region(std::uint32_t level) {
     while (mRegions.size() <= level) {
         const std::string name = mPrefix + "-level" + std::to_string(mRegions.size()) + ".nodes";
-        mRegions.push_back(std::make_unique<Region>(mDirectory / name));
+        mRegions.push_back(std::make_unique<Region>(mDirectory / name, mCodec));
     }
     return *mRegions[level];
 }

@@ -34,10 +34,11 @@ namespace ff::builder {
  */
 class LevelRegions {
 public:
-    /** Record spill files go to `directory`, named after `prefix`. */
+    /** Record spill files go to `directory`, coded with `codec`, named after `prefix`. */
     LevelRegions(
             storage::SceneWriter& writer,
             std::filesystem::path directory,
+            SpillCodec codec,
             std::string prefix,
             std::uint64_t extentBytes);
 
@@ -69,7 +70,7 @@ public:
 
 private:
     struct Region {
-        explicit Region(const std::filesystem::path& records);
+        Region(const std::filesystem::path& records, SpillCodec codec);
         RecordFile records;
         std::vector<std::uint32_t> pageFill; ///< records per node page; the last one is open
         std::uint64_t firstNodePage = 0;     ///< in the scene file, set by finish()
@@ -91,6 +92,7 @@ private:
 
     storage::SceneWriter& mWriter;
     std::filesystem::path mDirectory;
+    SpillCodec mCodec;
     std::string mPrefix;
     std::uint32_t mPageSize;
     std::uint64_t mExtentTriangles; ///< capacity of an extent, whole pages

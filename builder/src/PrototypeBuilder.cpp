@@ -115,6 +115,7 @@ PrototypeBuilder::PrototypeBuilder(
         std::uint64_t levelExtentBytes,
         unsigned threads,
         std::filesystem::path tempDirectory,
+        SpillCodec spillCodec,
         std::function<void(const BuildProgress&)> progress)
     : mWriter(writer)
     , mParams(params)
@@ -123,6 +124,7 @@ PrototypeBuilder::PrototypeBuilder(
     , mLevelExtentBytes(levelExtentBytes)
     , mThreads(std::max(threads, 1u))
     , mTempDirectory(std::move(tempDirectory))
+    , mSpillCodec(spillCodec)
     , mProgress(std::move(progress)) {}
 
 Result<PrototypeBuildResult> PrototypeBuilder::build(
@@ -275,7 +277,9 @@ Result<PrototypeBuildResult> PrototypeBuilder::buildChunked(
             4096,
             1u << 20);
     for (std::size_t c = 0; c < chunkNodes.size(); ++c) {
-        chunkFiles.emplace_back(mTempDirectory / ("proto" + std::to_string(prototypeId) + "-chunk" + std::to_string(c) + ".run"));
+        chunkFiles.emplace_back(
+                mTempDirectory / ("proto" + std::to_string(prototypeId) + "-chunk" + std::to_string(c) + ".run"),
+                mSpillCodec);
         chunkFiles.back().setBufferLimit(bufferBytes);
     }
     // The run file is consumed: its space comes back behind the reader, so the triangles need
@@ -330,7 +334,7 @@ Result<PrototypeBuildResult> PrototypeBuilder::buildChunked(
     // pages level by level, as if it had been built in one piece.
     PrototypeBuildResult result;
     result.chunks = chunkNodes.size();
-    LevelRegions levels(mWriter, mTempDirectory, "proto" + std::to_string(prototypeId), mLevelExtentBytes);
+    LevelRegions levels(mWriter, mTempDirectory, mSpillCodec, "proto" + std::to_string(prototypeId), mLevelExtentBytes);
     std::vector<BuildNode> chunkRoots(chunkNodes.size()); // for the top tree
     for (std::size_t begin = 0; begin < chunkNodes.size(); begin += mThreads) {
         const std::size_t end = std::min<std::size_t>(begin + mThreads, chunkNodes.size());

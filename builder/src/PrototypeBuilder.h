@@ -68,6 +68,7 @@ public:
             std::uint64_t levelExtentBytes,
             unsigned threads,
             std::filesystem::path tempDirectory,
+            SpillCodec spillCodec,
             std::function<void(const BuildProgress&)> progress = {});
 
     /** Builds and writes the prototype in `triangles` (consumed); `grid`: the voxel grid its
@@ -93,6 +94,7 @@ private:
     std::uint64_t mLevelExtentBytes; ///< memory per octree level for triangles on their way out (LevelRegions)
     unsigned mThreads;
     std::filesystem::path mTempDirectory;
+    SpillCodec mSpillCodec;
     std::function<void(const BuildProgress&)> mProgress;
     const VoxelGrid* mGrid = nullptr; ///< ORSD: the grid of the prototype being built
 

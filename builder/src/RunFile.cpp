@@ -1,5 +1,9 @@
 #include "RunFile.h"
 
+#include <meshoptimizer.h>
+
+#include <algorithm>
+
 #include <cerrno>
 #include <cstring>
 #include <fcntl.h>
@@ -29,6 +33,35 @@ private:
     int mFd;
 };
 
+/** Before every block: what it holds and how it is encoded (the file's own codec, checked). */
+struct BlockHeader {
+    std::uint32_t magic;
+    std::uint32_t codec; ///< a SpillCodec
+    std::uint32_t itemCount;
+    std::uint32_t payloadBytes;
+};
+static_assert(sizeof(BlockHeader) == 16);
+constexpr std::uint32_t kBlockMagic = 0x4B4C4246; // "FBLK"
+
+/** The element the vertex codec codes one lane at a time: a triangle's vertex (its three
+ *  vertices are three elements, so neighbouring corners delta against each other), else the
+ *  whole record. */
+template <class Item> constexpr std::size_t kCodecElementBytes = sizeof(Item);
+template <> constexpr std::size_t kCodecElementBytes<storage::PackedTriangle> = sizeof(storage::PackedVertex);
+
+template <class Item> constexpr std::size_t kBlockItems = kSpillBlockBytes / sizeof(Item);
+
+template <class Item> constexpr std::size_t elementsOf(std::size_t items) {
+    static_assert(sizeof(Item) % kCodecElementBytes<Item> == 0);
+    static_assert(kCodecElementBytes<Item> % 4 == 0 && kCodecElementBytes<Item> <= 256); // the codec's limits
+    return items * (sizeof(Item) / kCodecElementBytes<Item>);
+}
+
+template <class Item> std::size_t encodedBound(SpillCodec codec, std::size_t items) {
+    return codec == SpillCodec::Raw ? items * sizeof(Item)
+                                    : meshopt_encodeVertexBufferBound(elementsOf<Item>(items), kCodecElementBytes<Item>);
+}
+
 Status writeAll(int fd, const std::byte* data, std::size_t size, const std::filesystem::path& path) {
     while (size > 0) {
         const ssize_t n = ::write(fd, data, size);
@@ -43,7 +76,35 @@ Status writeAll(int fd, const std::byte* data, std::size_t size, const std::file
     return Status::ok();
 }
 
+/** Reads exactly out.size() bytes; false at the end of the file before that. */
+Result<bool> readExact(int fd, std::span<std::byte> out, const std::filesystem::path& path) {
+    std::size_t done = 0;
+    while (done < out.size()) {
+        const ssize_t n = ::read(fd, out.data() + done, out.size() - done);
+        if (n < 0 && errno == EINTR)
+            continue;
+        if (n < 0)
+            return ioStatus(errno, "cannot read spill file", path);
+        if (n == 0)
+            return false;
+        done += static_cast<std::size_t>(n);
+    }
+    return true;
+}
+
 } // namespace
+
+std::string_view spillCodecName(SpillCodec codec) noexcept {
+    return codec == SpillCodec::Raw ? "raw" : "compact";
+}
+
+std::optional<SpillCodec> parseSpillCodec(std::string_view name) noexcept {
+    if (name == "raw")
+        return SpillCodec::Raw;
+    if (name == "compact")
+        return SpillCodec::Compact;
+    return std::nullopt;
+}
 
 Status ioStatus(int error, const std::string& what, const std::filesystem::path& path) {
     const ErrorCode code = (error == ENOSPC || error == EDQUOT) ? ErrorCode::DiskFull : ErrorCode::IoError;
@@ -51,7 +112,9 @@ Status ioStatus(int error, const std::string& what, const std::filesystem::path&
 }
 
 template <class Item>
-SpillFile<Item>::SpillFile(std::filesystem::path path) : mPath(std::move(path)) {}
+SpillFile<Item>::SpillFile(std::filesystem::path path, SpillCodec codec)
+    : mPath(std::move(path))
+    , mCodec(codec) {}
 
 template <class Item>
 SpillFile<Item>::~SpillFile() { remove(); }
@@ -59,6 +122,7 @@ SpillFile<Item>::~SpillFile() { remove(); }
 template <class Item>
 SpillFile<Item>::SpillFile(SpillFile&& other) noexcept
     : mPath(std::move(other.mPath))
+    , mCodec(other.mCodec)
     , mBuffer(std::move(other.mBuffer))
     , mBufferLimitBytes(other.mBufferLimitBytes)
     , mCount(other.mCount)
@@ -92,14 +156,36 @@ Status SpillFile<Item>::writeOut(std::span<const Item> more) {
     if (fd.get() < 0)
         return ioStatus(errno, "cannot open spill file", mPath);
     mCreated = true;
-    for (const auto bytes : {std::as_bytes(std::span(mBuffer)), std::as_bytes(more)}) {
-        FF_RETURN_IF_ERROR(writeAll(fd.get(), bytes.data(), bytes.size(), mPath));
-        mBytesWritten += bytes.size();
+    // One encoder buffer per thread (a block's bound, ~1 MiB), reused: idle files hold none,
+    // and a write does not pay a fresh allocation's zeroing and page faults.
+    thread_local std::vector<unsigned char> scratch;
+    for (const std::span<const Item> items : {std::span<const Item>(mBuffer), more}) {
+        for (std::size_t at = 0; at < items.size(); at += kBlockItems<Item>)
+            FF_RETURN_IF_ERROR(writeBlock(fd.get(), items.subspan(at, std::min(kBlockItems<Item>, items.size() - at)), scratch));
     }
     if (::close(fd.release()) != 0)
         return ioStatus(errno, "cannot close", mPath);
     mBuffer.clear();
     mBuffer.shrink_to_fit(); // idle spill files should not pin their peak buffer
+    return Status::ok();
+}
+
+template <class Item>
+Status SpillFile<Item>::writeBlock(int fd, std::span<const Item> items, std::vector<unsigned char>& scratch) {
+    std::span<const std::byte> payload = std::as_bytes(items);
+    if (mCodec == SpillCodec::Compact) {
+        scratch.resize(std::max(scratch.size(), encodedBound<Item>(mCodec, items.size())));
+        const std::size_t n = meshopt_encodeVertexBuffer(
+                scratch.data(), scratch.size(), items.data(), elementsOf<Item>(items.size()), kCodecElementBytes<Item>);
+        if (n == 0)
+            return Status(ErrorCode::Internal, "cannot encode a block of spill file " + mPath.string());
+        payload = std::as_bytes(std::span(scratch.data(), n));
+    }
+    const BlockHeader header{kBlockMagic, static_cast<std::uint32_t>(mCodec), static_cast<std::uint32_t>(items.size()),
+                             static_cast<std::uint32_t>(payload.size())};
+    FF_RETURN_IF_ERROR(writeAll(fd, reinterpret_cast<const std::byte*>(&header), sizeof(header), mPath));
+    FF_RETURN_IF_ERROR(writeAll(fd, payload.data(), payload.size(), mPath));
+    mBytesWritten += sizeof(header) + payload.size();
     return Status::ok();
 }
 
@@ -144,27 +230,43 @@ Status SpillFile<Item>::readBatches(
     FileDescriptor fd(::open(mPath.c_str(), openFlags | O_CLOEXEC));
     if (fd.get() < 0)
         return ioStatus(errno, "cannot open spill file", mPath);
-    std::vector<Item> batch(std::max<std::size_t>(batchSize, 1));
+    const std::size_t most = std::max<std::size_t>(batchSize, 1);
+    const auto corrupt = [this](std::uint64_t at, const std::string& what) {
+        return Status(ErrorCode::IoError,
+                      "spill file " + mPath.string() + ": block at byte " + std::to_string(at) + " " + what);
+    };
+    std::vector<Item> block;
+    std::vector<unsigned char> encoded;
     std::uint64_t remaining = mCount;
     std::uint64_t bytesRead = 0;
     while (remaining > 0) {
-        const std::size_t want = static_cast<std::size_t>(std::min<std::uint64_t>(remaining, batch.size()));
-        auto* out = reinterpret_cast<char*>(batch.data());
-        std::size_t bytes = want * sizeof(Item);
-        while (bytes > 0) {
-            const ssize_t n = ::read(fd.get(), out, bytes);
-            if (n < 0 && errno == EINTR)
-                continue;
-            if (n < 0)
-                return ioStatus(errno, "cannot read spill file", mPath);
-            if (n == 0)
-                return Status(ErrorCode::IoError, "spill file " + mPath.string() + " is shorter than written");
-            out += n;
-            bytes -= static_cast<std::size_t>(n);
+        BlockHeader header{};
+        FF_ASSIGN_OR_RETURN(const bool got, readExact(fd.get(), std::as_writable_bytes(std::span(&header, 1)), mPath));
+        if (!got)
+            return Status(ErrorCode::IoError, "spill file " + mPath.string() + " is shorter than written");
+        // Our own file, but on a disk: a block that does not say what was written is an error.
+        if (header.magic != kBlockMagic || header.codec != static_cast<std::uint32_t>(mCodec) ||
+            header.itemCount == 0 || header.itemCount > kBlockItems<Item> || header.itemCount > remaining ||
+            header.payloadBytes > encodedBound<Item>(mCodec, header.itemCount) ||
+            (mCodec == SpillCodec::Raw && header.payloadBytes != header.itemCount * sizeof(Item)))
+            return corrupt(bytesRead, "has a bad header");
+        block.resize(header.itemCount);
+        std::span<std::byte> payload = std::as_writable_bytes(std::span(block));
+        if (mCodec == SpillCodec::Compact) {
+            encoded.resize(header.payloadBytes);
+            payload = std::as_writable_bytes(std::span(encoded));
         }
-        FF_RETURN_IF_ERROR(visit(std::span(batch.data(), want)));
-        remaining -= want;
-        bytesRead += want * sizeof(Item);
+        FF_ASSIGN_OR_RETURN(const bool whole, readExact(fd.get(), payload.first(header.payloadBytes), mPath));
+        if (!whole)
+            return Status(ErrorCode::IoError, "spill file " + mPath.string() + " is shorter than written");
+        if (mCodec == SpillCodec::Compact &&
+            meshopt_decodeVertexBuffer(block.data(), elementsOf<Item>(block.size()), kCodecElementBytes<Item>, encoded.data(),
+                                       encoded.size()) != 0)
+            return corrupt(bytesRead, "does not decode");
+        for (std::size_t at = 0; at < block.size(); at += most)
+            FF_RETURN_IF_ERROR(visit(std::span(block).subspan(at, std::min(most, block.size() - at))));
+        remaining -= header.itemCount;
+        bytesRead += sizeof(header) + header.payloadBytes;
         if (afterBatch)
             afterBatch(fd.get(), bytesRead);
     }

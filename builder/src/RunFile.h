@@ -1,5 +1,6 @@
 #pragma once
 
+#include <ff/builder/SpillCodec.h>
 #include <ff/storage/SceneFormat.h>
 #include <ff/storage/Status.h>
 
@@ -13,13 +14,15 @@ namespace ff::builder {
 
 /**
  * An append-only temporary file of fixed-size records (triangles, node records) with its own
- * write buffer: how the builder keeps streams out of memory. Reading is sequential, in batches.
- * The file is removed when the SpillFile dies. Not thread-safe.
+ * write buffer: how the builder keeps streams out of memory. The file is a sequence of blocks
+ * of at most kSpillBlockBytes of items each, encoded with the file's codec behind a 16-byte
+ * header; reading is sequential, in batches, one decoded block in memory at a time. The file
+ * is removed when the SpillFile dies. Not thread-safe.
  */
 template <class Item>
 class SpillFile {
 public:
-    explicit SpillFile(std::filesystem::path path);
+    explicit SpillFile(std::filesystem::path path, SpillCodec codec = SpillCodec::Compact);
     ~SpillFile();
     SpillFile(SpillFile&& other) noexcept;
     SpillFile& operator=(SpillFile&&) = delete;
@@ -34,7 +37,9 @@ public:
 
     std::uint64_t count() const noexcept { return mCount; }
     std::size_t bufferedBytes() const noexcept { return mBuffer.size() * sizeof(Item); }
+    /** Bytes on disk: encoded blocks and their headers. */
     std::uint64_t bytesWritten() const noexcept { return mBytesWritten; }
+    SpillCodec codec() const noexcept { return mCodec; }
     const std::filesystem::path& path() const noexcept { return mPath; }
 
     void setBufferLimit(std::size_t bytes) noexcept { mBufferLimitBytes = bytes; }
@@ -64,6 +69,8 @@ public:
 private:
     /** Writes the buffer, then `more`, and empties the buffer. */
     [[nodiscard]] Status writeOut(std::span<const Item> more);
+    /** Appends one block of at most kSpillBlockBytes of items to `fd`. */
+    [[nodiscard]] Status writeBlock(int fd, std::span<const Item> items, std::vector<unsigned char>& scratch);
     /** forEachBatch() and consumeBatches(): `afterBatch` gets the descriptor and the bytes read. */
     [[nodiscard]] Status readBatches(
             std::size_t batchSize,
@@ -72,12 +79,16 @@ private:
             const std::function<void(int fd, std::uint64_t bytesRead)>& afterBatch);
 
     std::filesystem::path mPath;
+    SpillCodec mCodec;
     std::vector<Item> mBuffer;
     std::size_t mBufferLimitBytes = 1u << 20;
     std::uint64_t mCount = 0;
     std::uint64_t mBytesWritten = 0;
     bool mCreated = false;
 };
+
+/** Raw bytes of items in one block of a spill file at most: what reading holds decoded. */
+inline constexpr std::size_t kSpillBlockBytes = 1u << 20;
 
 /** Triangles on their way to a chunk or a level region (RunFile.cpp instantiates these two). */
 using RunFile = SpillFile<storage::PackedTriangle>;

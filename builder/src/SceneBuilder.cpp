@@ -141,13 +141,15 @@ Result<std::unique_ptr<SceneBuilder>> SceneBuilder::create(
     impl->report.pageSizeAuto = !options.pageSize.has_value();
     impl->report.threads = impl->options.threads;
     impl->report.decomposition = std::string(decompositionName(options.hierarchy.decomposition));
+    impl->report.spillCodec = std::string(spillCodecName(options.spillCodec));
     return std::unique_ptr<SceneBuilder>(new SceneBuilder(std::move(impl)));
 }
 
 Result<PrototypeId> SceneBuilder::addPrototype(std::string_view name) {
     const auto id = static_cast<PrototypeId>(mImpl->prototypes.size());
     auto state = std::make_unique<PrototypeState>(PrototypeState{
-            std::string(name), RunFile(mImpl->tempDirectory / ("proto" + std::to_string(id) + ".run")), {}, {}, std::nullopt});
+            std::string(name), RunFile(mImpl->tempDirectory / ("proto" + std::to_string(id) + ".run"), mImpl->options.spillCodec), {}, {},
+            std::nullopt});
     state->boundsMin = glm::vec3(std::numeric_limits<float>::infinity());
     state->boundsMax = glm::vec3(-std::numeric_limits<float>::infinity());
     mImpl->prototypes.push_back(std::move(state));
@@ -257,7 +259,7 @@ Result<BuildReport> SceneBuilder::finish() {
     const std::uint64_t levelExtentBytes = std::min<std::uint64_t>(fixedReserve / 64, 1u << 20);
     PrototypeBuilder protoBuilder(
             *s.writer, s.options.hierarchy, chunkTriangles, levelExtentBytes, s.options.threads, s.tempDirectory,
-            s.options.progress);
+            s.options.spillCodec, s.options.progress);
     // Prototypes left without triangles get no record (a record needs a root node): the table
     // holds the others in declaration order, and storedIndex maps declared ids to it.
     constexpr std::uint32_t kNotStored = std::numeric_limits<std::uint32_t>::max();
@@ -436,6 +438,7 @@ std::string buildReportJson(const BuildReport& r) {
               {"tables", r.tableBytes},
               {"spill", r.spillBytes}}},
             {"pages", {{"nodes", r.nodePages}, {"geometry", r.geometryPages}, {"tables", r.tablePages}}},
+            {"spill_codec", r.spillCodec},
             {"seconds", phases},
             {"total_seconds", total},
             {"memory_budget_bytes", r.memoryBudgetBytes},
