@@ -87,7 +87,10 @@ void runIoThread(SharedQueues& shared, IPageSource& source, IPageDecoder* decode
 /** Main-thread bookkeeping of one page that is not Absent. */
 struct PageEntry {
     PageState state = PageState::Absent;
-    PageBuffer bytes;                     ///< Resident: the page as kept
+    /** Resident: the page as kept. Shared with its pins (pin()): while one lives, use_count()
+     *  > 1 and the page is not evicted. Pins are made on the main thread only, so a count of 1
+     *  read there stays 1 until the main thread pins again. */
+    std::shared_ptr<const PageBuffer> bytes;
     std::uint64_t usedFrame = kNeverUsed; ///< Resident: last frame whose tryGet() returned it
     Status failure;                       ///< Failed: why
 };
@@ -141,26 +144,30 @@ struct PageCache::Impl {
         return afterInstall >= bytes ? afterInstall - bytes : 0;
     }
 
+    static bool pinned(const PageEntry& entry) { return entry.bytes.use_count() > 1; }
+
     void evict(std::uint64_t page) {
         const auto it = entries.find(page);
         FF_ASSERT(it != entries.end() && it->second.state == PageState::Resident);
-        FF_ASSERT(it->second.usedFrame != frame);
-        stats.residentBytes -= it->second.bytes.size;
+        FF_ASSERT(it->second.usedFrame != frame && !pinned(it->second));
+        stats.residentBytes -= it->second.bytes->size;
         entries.erase(it);
         lru.erase(page);
         ++stats.evicted;
     }
 
-    /** Evicts least-recently-used pages not used by the current frame until residentBytes <=
-     *  target or only the current frame's pages are left. */
+    /** Evicts least-recently-used pages neither used by the current frame nor pinned until
+     *  residentBytes <= target or none of those is left. */
     void evictDownTo(std::uint64_t target) {
         // Pages used this frame were touched by tryGet(), so the walk from the oldest end meets
         // evictable pages first; frameBytes tells when none is left without walking.
         while (stats.residentBytes > target && stats.residentBytes > frameBytes) {
             const auto victim = lru.oldestWhereNot([this](std::uint64_t page) {
-                return entries.find(page)->second.usedFrame == frame;
+                const PageEntry& entry = entries.find(page)->second;
+                return entry.usedFrame == frame || pinned(entry);
             });
-            FF_ASSERT(victim.has_value());
+            if (!victim)
+                return; // the rest is pinned
             evict(*victim);
         }
     }
@@ -193,10 +200,14 @@ struct PageCache::Impl {
                 return false;
             }
             evictDownTo(std::min(lowWater(bytes), budget - bytes));
+            if (stats.residentBytes + bytes > budget) { // pins hold the rest
+                entries.erase(it);
+                ++stats.dropped;
+                return false;
+            }
         }
-        FF_ASSERT(stats.residentBytes + bytes <= budget);
         entry.state = PageState::Resident;
-        entry.bytes = std::move(done.bytes);
+        entry.bytes = std::make_shared<const PageBuffer>(std::move(done.bytes));
         entry.usedFrame = kNeverUsed;
         lru.touch(done.page);
         stats.residentBytes += bytes;
@@ -280,12 +291,22 @@ std::optional<std::span<const std::byte>> PageCache::tryGet(std::uint64_t page, 
     const bool first = entry.usedFrame != m.frame;
     if (first) {
         entry.usedFrame = m.frame;
-        m.frameBytes += entry.bytes.size;
+        m.frameBytes += entry.bytes->size;
     }
     if (firstUse)
         *firstUse = first;
     m.lru.touch(page);
-    return entry.bytes.view();
+    return entry.bytes->view();
+}
+
+storage::PagePin PageCache::pin(std::uint64_t page) {
+    Impl& m = *mImpl;
+    FF_ASSERT(m.onOwnerThread());
+    const auto it = m.entries.find(page);
+    if (it == m.entries.end() || it->second.state != PageState::Resident)
+        return {};
+    const std::shared_ptr<const PageBuffer>& kept = it->second.bytes;
+    return storage::PagePin(kept->view(), kept);
 }
 
 void PageCache::request(std::uint64_t page, float priority) {

@@ -727,6 +727,79 @@ TEST(PageCacheTest, DestructionWithCompletionsNotPumpedFreesThem) {
 
 // ---- threading contract -------------------------------------------------------------------
 
+// ---- pins -------------------------------------------------------------------------------------
+
+TEST(PageCacheTest, APinnedPageIsNeverEvictedUntilItsPinIsReleased) {
+    auto source = std::make_shared<FakePageSource>(kPageSize, 64);
+    auto cache = makeCache(source, makeOptions(4 * kPageSize));
+    ASSERT_NE(cache, nullptr);
+    loadPages(*cache, {0, 1, 2, 3});
+    storage::PagePin pin = cache->pin(0);
+    ASSERT_FALSE(pin.empty());
+    EXPECT_TRUE(holdsPage(pin.bytes(), 0));
+    for (std::uint64_t first = 4; first < 40; first += 3) {
+        loadPages(*cache, range(first, first + 3)); // every frame evicts
+        ASSERT_TRUE(withinBudget(*cache));
+        ASSERT_EQ(cache->state(0), PageState::Resident) << first;
+        ASSERT_TRUE(holdsPage(pin.bytes(), 0));
+    }
+    pin.reset();
+    loadPages(*cache, range(40, 44));
+    EXPECT_EQ(cache->state(0), PageState::Absent);
+    EXPECT_TRUE(withinBudget(*cache));
+    EXPECT_TRUE(cache->pin(0).empty()); // not resident: nothing to pin
+}
+
+TEST(PageCacheTest, WhenPinsHoldTheBudgetCompletionsAreDroppedNotForced) {
+    auto source = std::make_shared<FakePageSource>(kPageSize, 16);
+    auto cache = makeCache(source, makeOptions(2 * kPageSize));
+    ASSERT_NE(cache, nullptr);
+    loadPages(*cache, {0, 1});
+    storage::PagePin a = cache->pin(0);
+    storage::PagePin b = cache->pin(1);
+    const std::uint64_t droppedBefore = cache->stats().dropped;
+    loadPages(*cache, {2, 3});
+    EXPECT_EQ(cache->stats().dropped, droppedBefore + 2);
+    EXPECT_EQ(cache->state(2), PageState::Absent);
+    EXPECT_TRUE(withinBudget(*cache));
+    b.reset();
+    loadPages(*cache, {2});
+    EXPECT_EQ(cache->state(2), PageState::Resident);
+    EXPECT_EQ(cache->state(0), PageState::Resident);
+}
+
+TEST(PageCacheTest, APinKeepsItsBytesAfterTheCacheIsGone) {
+    auto source = std::make_shared<FakePageSource>(kPageSize, 8);
+    storage::PagePin pin;
+    {
+        auto cache = makeCache(source, makeOptions(4 * kPageSize));
+        ASSERT_NE(cache, nullptr);
+        loadPages(*cache, {5});
+        pin = cache->pin(5);
+    }
+    ASSERT_EQ(pin.bytes().size(), kPageSize);
+    EXPECT_TRUE(holdsPage(pin.bytes(), 5)); // ASan: no use after free
+}
+
+TEST(PageCacheTest, APinMayBeReleasedOnAnotherThread) {
+    auto source = std::make_shared<FakePageSource>(kPageSize, 32);
+    auto cache = makeCache(source, makeOptions(2 * kPageSize));
+    ASSERT_NE(cache, nullptr);
+    for (int round = 0; round < 20; ++round) {
+        const auto page = static_cast<std::uint64_t>(round);
+        loadPages(*cache, {page});
+        storage::PagePin pin = cache->pin(page);
+        ASSERT_FALSE(pin.empty());
+        std::thread reader([held = std::move(pin), page]() mutable {
+            EXPECT_TRUE(holdsPage(held.bytes(), page));
+            held.reset();
+        });
+        reader.join();
+        ASSERT_TRUE(withinBudget(*cache));
+    }
+    EXPECT_GT(cache->stats().evicted, 0u); // released pins left their pages evictable
+}
+
 TEST(PageCacheDeathTest, MainThreadMethodsAssertTheirThread) {
 #ifdef NDEBUG
     GTEST_SKIP() << "FF_ASSERT is off in this build";

@@ -18,8 +18,13 @@
 // kept) never exceed budgetBytes; reads in flight hold their own buffers, bounded by maxInFlight
 // pages of at most maxDecodedBytes each. A request the budget has no
 // room for beside the frames' pages is not read (readOnlyWhatFits); a completion that cannot
-// fit without evicting a page the current frame uses is dropped (and counted), never forced in.
-// The one exception is setBudget() below the bytes the current frame holds: see there.
+// fit without evicting a page the current frame uses or a pinned page is dropped (and counted),
+// never forced in. The one exception is setBudget() below the bytes the current frame (or the
+// pins) hold: see there.
+//
+// Pins (pin()): a page's bytes can also be held by an RAII storage::PagePin, for work that
+// outlives a frame: a pinned page is never evicted, and its bytes outlive even the cache until
+// the pin is released, on any thread.
 //
 // Page life cycle (state()):  Absent -request-> Pending -read ok, fits-> Resident -evict-> Absent
 //                             Pending -not renewed by endFrame()/displaced/dropped-> Absent
@@ -119,6 +124,12 @@ public:
      *  resident and `firstUse` is given, *firstUse tells whether this is the frame's first
      *  tryGet of it (callers count the distinct pages a frame used). */
     std::optional<std::span<const std::byte>> tryGet(std::uint64_t page, bool* firstUse = nullptr);
+    /** A pin of a resident page (empty if it is not resident): the page is not evicted, and its
+     *  bytes (as tryGet() gives them) stay valid, until the pin is released — on any thread,
+     *  even after the cache is gone. Not a use by the frame (no hit, no LRU touch). Pinned
+     *  pages count in the budget: while pins hold it, completions that do not fit are dropped,
+     *  and after setBudget() residentBytes may stay above budgetBytes until they are released. */
+    [[nodiscard]] storage::PagePin pin(std::uint64_t page);
     /** Asks for a page; a higher priority is fetched first (equal priorities: first asked, first
      *  read). Renewing a request updates its priority and keeps it alive through endFrame().
      *  No-op for resident or failed pages. A page >= the source's pageCount fails at once
@@ -143,9 +154,10 @@ public:
     /** The most bytes one resident page takes: the source's page size, or the decoder's
      *  maxDecodedBytes. */
     std::uint64_t maxPageBytes() const noexcept;
-    /** Changes the budget (at least maxPageBytes(): asserted), evicting as needed, never pages used
-     *  by the current frame. Should those alone exceed the new budget, residentBytes stays
-     *  above budgetBytes until the next beginFrame(), which evicts down to it; no completion is
+    /** Changes the budget (at least maxPageBytes(): asserted), evicting as needed, never pages
+     *  used by the current frame or pinned. Should those alone exceed the new budget,
+     *  residentBytes stays above budgetBytes until the next beginFrame() (or, for pinned pages,
+     *  the first after their pins are released), which evicts down to it; no completion is
      *  installed meanwhile. This is the only time residentBytes > budgetBytes. */
     void setBudget(std::uint64_t bytes);
 
