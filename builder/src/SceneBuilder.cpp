@@ -347,10 +347,11 @@ Result<BuildReport> SceneBuilder::finish() {
     if (!metadata.is_object())
         metadata = nlohmann::json::object();
     metadata["prototypeNames"] = names;
-    // The same input must give the same bytes (DESIGN.md "deterministic output"): the report
-    // stored in the file leaves out timings and memory use; the returned report has them.
+    // The same input must give the same bytes (DESIGN.md "deterministic output"), whatever the
+    // machine and --threads: the report stored in the file leaves out timings, memory use and
+    // the thread count (by default the machine's cores); the returned report has them.
     nlohmann::json build = nlohmann::json::parse(buildReportJson(report));
-    for (const char* machineDependent : {"seconds", "total_seconds", "peak_rss_bytes"})
+    for (const char* machineDependent : {"seconds", "total_seconds", "peak_rss_bytes", "threads"})
         build.erase(machineDependent);
     metadata["build"] = std::move(build);
     const std::string metadataText = metadata.dump();

@@ -371,6 +371,20 @@ TEST(SceneBuilderTest, SameInputGivesByteIdenticalFiles) {
     }
 }
 
+// A build on one thread and on three: the same bytes (the thread count, which defaults to the
+// machine's cores, is not written into the file). Prototypes that fit one chunk here; a chunked
+// prototype's chunks are still sized by budget / threads (issue 18).
+TEST(SceneBuilderTest, TheThreadCountDoesNotChangeTheFile) {
+    const fs::path dir = freshTestDir();
+    const RecordingSink scene = generate("molecule:spheres=300");
+    const BuildReport one = buildOrFail(scene, dir / "one.ffs", smallOptions(1));
+    const BuildReport three = buildOrFail(scene, dir / "three.ffs", smallOptions(3));
+    EXPECT_EQ(one.threads, 1u);
+    EXPECT_EQ(three.threads, 3u);
+    EXPECT_EQ(three.chunks, one.chunks);
+    EXPECT_TRUE(readBytes(dir / "one.ffs") == readBytes(dir / "three.ffs"));
+}
+
 // ---- out of core -----------------------------------------------------------------------------
 
 /** Triangles per chunk for the minimum budget (SceneBuilder::finish, PrototypeBuilder.h). */
