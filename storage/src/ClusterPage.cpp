@@ -26,36 +26,54 @@ Status corrupt(const std::string& what) {
 
 } // namespace
 
-ClusterPageWriter::ClusterPageWriter(std::uint32_t payloadBytes, std::uint32_t prototype)
-    : mBytes(payloadBytes)
+ClusterPageWriter::ClusterPageWriter(std::uint32_t pageSize, std::uint32_t prototype)
+    : mBytes(pagePayloadBytes(pageSize))
+    , mDecodedLimit(maxDecodedClusterBytes(pageSize))
     , mPrototype(prototype) {
-    FF_ASSERT(payloadBytes >= kClusterPageHeaderSize);
+    FF_ASSERT(isValidPageSize(pageSize));
 }
 
-bool ClusterPageWriter::fits(std::size_t bytes) const noexcept {
-    return bytes <= mBytes.size() - mUsed;
-}
-
-Result<std::uint32_t>
-ClusterPageWriter::append(std::span<const std::byte> clusters, std::uint32_t count) {
-    if (!fits(clusters.size()))
-        return Status(
-                ErrorCode::InvalidArgument,
-                "a payload of " + std::to_string(clusters.size()) + " bytes does not fit the " +
-                        std::to_string(mBytes.size() - mUsed) + " left in the page");
+Result<std::uint64_t>
+ClusterPageWriter::decodedBytesOf(std::span<const std::byte> clusters, std::uint32_t count) const {
     if (count == 0 || count > kMaxPageClusters - mClusterCount)
         return Status(ErrorCode::InvalidArgument, "a page holds 1 to 65,535 clusters");
     // The payload must be exactly `count` whole clusters: what a reader will find there.
     std::size_t at = 0;
+    std::uint64_t decoded = 0;
     for (std::uint32_t c = 0; c < count; ++c) {
         FF_ASSIGN_OR_RETURN(const ClusterInfo info, readClusterInfo(clusters.subspan(at)));
         at += info.encodedBytes;
+        decoded += decodedClusterBytes(info.vertexCount, std::uint64_t{info.triangleCount} * 3);
     }
     if (at != clusters.size())
         return Status(
                 ErrorCode::InvalidArgument,
                 std::to_string(count) + " clusters take " + std::to_string(at) +
                         " of the payload's " + std::to_string(clusters.size()) + " bytes");
+    return decoded;
+}
+
+bool ClusterPageWriter::fits(std::span<const std::byte> clusters, std::uint32_t count) const {
+    const Result<std::uint64_t> decoded = decodedBytesOf(clusters, count);
+    return decoded.isOk() && clusters.size() <= mBytes.size() - mUsed &&
+           mDecoded + *decoded <= mDecodedLimit;
+}
+
+Result<std::uint32_t>
+ClusterPageWriter::append(std::span<const std::byte> clusters, std::uint32_t count) {
+    FF_ASSIGN_OR_RETURN(const std::uint64_t decoded, decodedBytesOf(clusters, count));
+    if (clusters.size() > mBytes.size() - mUsed)
+        return Status(
+                ErrorCode::InvalidArgument,
+                "a payload of " + std::to_string(clusters.size()) + " bytes does not fit the " +
+                        std::to_string(mBytes.size() - mUsed) + " left in the page");
+    if (mDecoded + decoded > mDecodedLimit)
+        return Status(
+                ErrorCode::InvalidArgument,
+                "a payload decoding to " + std::to_string(decoded) +
+                        " bytes would take the page past " + std::to_string(mDecodedLimit) +
+                        " decoded");
+    mDecoded += decoded;
     const std::uint32_t offset = mUsed;
     std::memcpy(mBytes.data() + offset, clusters.data(), clusters.size());
     mUsed += static_cast<std::uint32_t>(clusters.size());
@@ -70,7 +88,8 @@ std::span<const std::byte> ClusterPageWriter::bytes() {
     return mBytes;
 }
 
-Result<ClusterPageIndex> indexClusterPage(std::span<const std::byte> payload) {
+Result<ClusterPageIndex>
+indexClusterPage(std::span<const std::byte> payload, std::uint32_t pageSize) {
     if (payload.size() < sizeof(ClusterPageHeader))
         return corrupt("truncated header (" + std::to_string(payload.size()) + " bytes)");
     ClusterPageHeader header{};
@@ -102,6 +121,11 @@ Result<ClusterPageIndex> indexClusterPage(std::span<const std::byte> payload) {
         index.indexCount += info->triangleCount * 3;
         at += info->encodedBytes;
     }
+    const std::uint64_t decoded = decodedClusterBytes(index.vertexCount, index.indexCount);
+    if (decoded > maxDecodedClusterBytes(pageSize))
+        return corrupt(
+                "decodes to " + std::to_string(decoded) + " bytes, more than the " +
+                std::to_string(maxDecodedClusterBytes(pageSize)) + " a page may");
     if (at != header.usedBytes)
         return corrupt(
                 std::to_string(header.clusterCount) + " clusters end at byte " +

@@ -23,18 +23,34 @@ namespace ff::storage {
 inline constexpr std::uint32_t kClusterPageMagic = 0x50434646; // "FFCP"
 inline constexpr std::size_t kClusterPageHeaderSize = 16;
 
+/** The most a cluster page of `pageSize` decodes to, as vertices (sizeof(PackedVertex) each)
+ *  and one-byte indices together: 3 x the page. Writers keep to it and readers check it, so a
+ *  decoder's output per page is bounded (the cache budgets a read in flight at its bound):
+ *  well-compressed clusters would otherwise decode to up to ~40 x their bytes. */
+constexpr std::uint64_t maxDecodedClusterBytes(std::uint32_t pageSize) noexcept {
+    return 3ull * pageSize;
+}
+
+/** Bytes `vertices` and `indices` take decoded (the quantity maxDecodedClusterBytes bounds). */
+constexpr std::uint64_t
+decodedClusterBytes(std::uint64_t vertices, std::uint64_t indices) noexcept {
+    return vertices * sizeof(PackedVertex) + indices;
+}
+
 /** Writes one page's payload: payloads of whole clusters appended in order, each placed whole.
  *  Deterministic: the same payloads in the same order give the same bytes. */
 class ClusterPageWriter {
 public:
-    /** `payloadBytes`: the page's payload size (pagePayloadBytes(pageSize)). */
-    ClusterPageWriter(std::uint32_t payloadBytes, std::uint32_t prototype);
+    /** A page of `pageSize` (payload: pagePayloadBytes(pageSize)). */
+    ClusterPageWriter(std::uint32_t pageSize, std::uint32_t prototype);
 
-    /** Whether a payload of `bytes` fits what is left. */
-    [[nodiscard]] bool fits(std::size_t bytes) const noexcept;
+    /** Whether `count` clusters in `clusters` fit what is left: their bytes, and what they
+     *  decode to within maxDecodedClusterBytes (false, too, if they are not whole clusters). */
+    [[nodiscard]] bool fits(std::span<const std::byte> clusters, std::uint32_t count) const;
     /** Appends `clusters` (`count` encoded clusters, back to back, checked) and returns the byte
-     *  offset it starts at in the page. Errors: InvalidArgument when it does not fit, when the
-     *  bytes are not `count` whole clusters, or when the page would hold more than 65,535. */
+     *  offset it starts at in the page. Errors: InvalidArgument when it does not fit (bytes or
+     *  decoded size), when the bytes are not `count` whole clusters, or when the page would
+     *  hold more than 65,535. */
     [[nodiscard]] Result<std::uint32_t>
     append(std::span<const std::byte> clusters, std::uint32_t count);
 
@@ -44,7 +60,13 @@ public:
     [[nodiscard]] std::span<const std::byte> bytes();
 
 private:
+    /** What `count` clusters in `clusters` decode to, or an error if they are not that. */
+    [[nodiscard]] Result<std::uint64_t>
+    decodedBytesOf(std::span<const std::byte> clusters, std::uint32_t count) const;
+
     std::vector<std::byte> mBytes;
+    std::uint64_t mDecodedLimit = 0;
+    std::uint64_t mDecoded = 0;
     std::uint32_t mUsed = kClusterPageHeaderSize;
     std::uint32_t mClusterCount = 0;
     std::uint32_t mPrototype = 0;
@@ -68,9 +90,11 @@ struct ClusterPageIndex {
     std::uint32_t indexCount = 0;
 };
 
-/** Checks the header and walks the clusters of a page payload. Errors: Corrupt ("cluster page:
- *  ..."), on truncation, garbage, clusters past usedBytes or a count that disagrees. */
-[[nodiscard]] Result<ClusterPageIndex> indexClusterPage(std::span<const std::byte> payload);
+/** Checks the header and walks the clusters of the payload of a page of `pageSize`. Errors:
+ *  Corrupt ("cluster page: ..."), on truncation, garbage, clusters past usedBytes, a count that
+ *  disagrees, or more than maxDecodedClusterBytes decoded. */
+[[nodiscard]] Result<ClusterPageIndex>
+indexClusterPage(std::span<const std::byte> payload, std::uint32_t pageSize);
 
 /** A payload found in an indexed page: clusters [first, first + count). */
 struct ClusterRun {
