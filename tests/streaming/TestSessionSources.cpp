@@ -100,8 +100,11 @@ TEST_F(SessionSourcesTest, ASessionOverPagesInMemoryDrawsWhatTheFileDraws) {
     EXPECT_GT(memoryFrame->stats.trianglesDrawn, 0u);
     // The pages the frame needed came through the source, the index's too.
     const auto reads = source->reads();
-    EXPECT_TRUE(reads.count(0) == 1) << "page 0 is read once, for the index";
-    EXPECT_TRUE(reads.count((*fromMemory)->scene().header().root.page) == 1);
+    ASSERT_EQ(reads.count(0), 1u);
+    EXPECT_EQ(reads.at(0), 1) << "page 0 is read once, for the index";
+    const std::uint64_t root = (*fromMemory)->scene().header().root.page;
+    ASSERT_EQ(reads.count(root), 1u);
+    EXPECT_EQ(reads.at(root), 1) << "the root's page is read once, and stays resident";
     EXPECT_GT(reads.size(), 2u);
 }
 
