@@ -134,11 +134,10 @@ indexClusterPage(std::span<const std::byte> payload, std::uint32_t pageSize) {
 }
 
 Result<ClusterRun> findClusterRun(
-        const ClusterPageIndex& index,
+        std::span<const IndexedCluster> clusters,
         std::uint32_t offset,
         std::uint32_t length,
         std::uint32_t count) {
-    const auto& clusters = index.clusters;
     // Clusters are in offset order: the first at or after `offset`.
     std::size_t lo = 0;
     std::size_t hi = clusters.size();

@@ -74,7 +74,7 @@ TEST_F(ClusterPageTest, PayloadsAreFoundAgainAndDecodeToTheirClusters) {
 
     for (const Payload& p : mPayloads) {
         const auto run = findClusterRun(
-                *index,
+                index->clusters,
                 p.offset,
                 static_cast<std::uint32_t>(p.bytes.size()),
                 static_cast<std::uint32_t>(p.patches.size()));
@@ -98,13 +98,13 @@ TEST_F(ClusterPageTest, ARangeThatIsNotExactlyARunOfClustersIsRefused) {
     ASSERT_TRUE(index.isOk());
     const Payload& p = mPayloads[2]; // three clusters
     const auto length = static_cast<std::uint32_t>(p.bytes.size());
-    EXPECT_FALSE(findClusterRun(*index, p.offset + 1, length, 3).isOk()); // not at a cluster
-    EXPECT_FALSE(findClusterRun(*index, p.offset, length - 1, 3).isOk()); // ends inside one
-    EXPECT_FALSE(findClusterRun(*index, p.offset, length, 2).isOk());     // counts disagree
-    EXPECT_FALSE(findClusterRun(*index, p.offset, length, 0).isOk());
-    EXPECT_FALSE(findClusterRun(*index, p.offset, length, 60000).isOk());
-    EXPECT_FALSE(findClusterRun(*index, 0xFFFFFFF0u, 100, 1).isOk());
-    EXPECT_TRUE(findClusterRun(*index, p.offset, length, 3).isOk());
+    EXPECT_FALSE(findClusterRun(index->clusters, p.offset + 1, length, 3).isOk()); // not at a cluster
+    EXPECT_FALSE(findClusterRun(index->clusters, p.offset, length - 1, 3).isOk()); // ends inside one
+    EXPECT_FALSE(findClusterRun(index->clusters, p.offset, length, 2).isOk());     // counts disagree
+    EXPECT_FALSE(findClusterRun(index->clusters, p.offset, length, 0).isOk());
+    EXPECT_FALSE(findClusterRun(index->clusters, p.offset, length, 60000).isOk());
+    EXPECT_FALSE(findClusterRun(index->clusters, 0xFFFFFFF0u, 100, 1).isOk());
+    EXPECT_TRUE(findClusterRun(index->clusters, p.offset, length, 3).isOk());
 }
 
 TEST_F(ClusterPageTest, TheWriterRefusesWhatIsNotWholeClustersOrDoesNotFit) {

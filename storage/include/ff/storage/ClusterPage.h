@@ -102,10 +102,11 @@ struct ClusterRun {
     std::uint32_t count = 0;
 };
 
-/** The clusters a representation's (offset, length, count) names: it must start at a cluster,
- *  end at one, and hold exactly `count`. Errors: Corrupt. */
+/** The clusters a representation's (offset, length, count) names among a page's `clusters`
+ *  (an index's, in offset order): it must start at a cluster, end at one, and hold exactly
+ *  `count`. Errors: Corrupt. */
 [[nodiscard]] Result<ClusterRun> findClusterRun(
-        const ClusterPageIndex& index,
+        std::span<const IndexedCluster> clusters,
         std::uint32_t offset,
         std::uint32_t length,
         std::uint32_t count);
