@@ -9,6 +9,8 @@
 #include <ff/bench/Benchmarks.h>
 #include <ff/builder/ClusterBuild.h>
 #include <ff/storage/ClusterCodec.h>
+#include <ff/storage/ClusterPage.h>
+#include <ff/storage/NodeRecordV2.h>
 #include <ff/storage/SceneFile.h>
 
 #include <draco/compression/decode.h>
@@ -21,6 +23,7 @@
 #include <deque>
 #include <fstream>
 #include <map>
+#include <optional>
 #include <sstream>
 
 namespace ff::bench {
@@ -44,6 +47,8 @@ struct CodecParams {
     std::vector<CodecScene> scenes;
     std::vector<CodecVariant> variants;
     double decodeSeconds = 1.0;
+    /** Pages the clusters are packed into for the v2 file estimate. */
+    std::uint32_t pageSize = storage::kDefaultPageSize;
 };
 
 double secondsSince(std::chrono::steady_clock::time_point start) {
@@ -113,13 +118,15 @@ Status appendSubtreeTriangles(
  * Calls visit(triangles) once per leaf of the hierarchy below root: with leafTriangles 0 the v1
  * file's own (each Cell node's own triangles), else the hierarchy cut where a subtree holds at
  * most leafTriangles, each such subtree's triangles as one leaf (what a hierarchy whose leaves
- * are whole clusters would store), and the nodes above it with their own.
+ * are whole clusters would store), and the nodes above it with their own. Adds the nodes that
+ * hierarchy has (the cut subtrees one node each) to `nodes`.
  */
 template <typename Visit>
 Status forEachLeaf(
         const storage::SceneFile& file,
         storage::NodeRef root,
         std::uint64_t leafTriangles,
+        std::uint64_t& nodes,
         Visit&& visit) {
     std::map<std::pair<std::uint32_t, std::uint32_t>, std::uint64_t> memo;
     if (leafTriangles > 0)
@@ -132,6 +139,7 @@ Status forEachLeaf(
         FF_ASSIGN_OR_RETURN(const storage::NodeRecord node, file.node(ref));
         if (node.kind != static_cast<std::uint8_t>(storage::NodeKind::Cell))
             continue; // an instance: its prototype is walked on its own
+        ++nodes;
         triangles.clear();
         if (leafTriangles > 0 && memo[{ref.page, ref.slot}] <= leafTriangles) {
             FF_RETURN_IF_ERROR(appendSubtreeTriangles(file, ref, triangles));
@@ -151,11 +159,67 @@ struct Encoded {
     double encodeSeconds = 0.0;
     float maxError = 0.0f; ///< the largest grid's bound, scene units
     std::uint64_t leaves = 0;
+    /** Format v2 as it would hold these hierarchies: their nodes (48-byte records), the payloads
+     *  of their leaves packed into cluster pages, a 20-byte representation per payload and page. */
+    std::uint64_t v2Nodes = 0;
+    std::uint64_t v2Pages = 0;
+    std::uint64_t v2Representations = 0;
     /** Each hierarchy's clusters, back to back, with its grid. */
     std::vector<std::pair<storage::PositionGrid, std::vector<std::byte>>> parts;
 };
 
-Result<Encoded> encodeScene(const storage::SceneFile& file, const CodecVariant& variant) {
+/** Packs node payloads into cluster pages as a v2 writer would: whole in a page, a new page
+ *  when one does not fit, a payload larger than a page split at clusters over several. */
+class PagePacker {
+public:
+    PagePacker(std::uint32_t pageSize, Encoded& counts) : mPageSize(pageSize), mCounts(counts) {}
+    ~PagePacker() {
+        if (mWriter && !mWriter->empty())
+            ++mCounts.v2Pages;
+    }
+    PagePacker(const PagePacker&) = delete;
+    PagePacker& operator=(const PagePacker&) = delete;
+
+    Status add(std::span<const std::byte> clusters, std::uint32_t count) {
+        if (count == 0)
+            return Status::ok();
+        if (place(clusters, count))
+            return Status::ok();
+        // Larger than a page: one cluster at a time, one representation per page it reaches.
+        std::uint32_t lastPage = ~0u;
+        while (!clusters.empty()) {
+            FF_ASSIGN_OR_RETURN(const storage::ClusterInfo info, storage::readClusterInfo(clusters));
+            const std::uint64_t before = mCounts.v2Representations;
+            if (!place(clusters.first(info.encodedBytes), 1))
+                return Status(ErrorCode::Internal, "a cluster larger than a page");
+            if (mCounts.v2Pages == lastPage)
+                mCounts.v2Representations = before; // the same page: the same representation
+            lastPage = static_cast<std::uint32_t>(mCounts.v2Pages);
+            clusters = clusters.subspan(info.encodedBytes);
+        }
+        return Status::ok();
+    }
+
+private:
+    bool place(std::span<const std::byte> clusters, std::uint32_t count) {
+        if (!mWriter || !mWriter->fits(clusters, count)) {
+            if (mWriter && !mWriter->empty())
+                ++mCounts.v2Pages;
+            mWriter.emplace(mPageSize, 0);
+            if (!mWriter->fits(clusters, count))
+                return false;
+        }
+        const bool placed = mWriter->append(clusters, count).isOk();
+        mCounts.v2Representations += placed ? 1 : 0;
+        return placed;
+    }
+
+    std::uint32_t mPageSize;
+    Encoded& mCounts;
+    std::optional<storage::ClusterPageWriter> mWriter;
+};
+
+Result<Encoded> encodeScene(const storage::SceneFile& file, const CodecVariant& variant, std::uint32_t pageSize) {
     std::vector<Hierarchy> hierarchies = {
             {file.header().root, file.header().boundsMin, file.header().boundsMax}};
     for (const storage::PrototypeRecord& p : file.prototypes())
@@ -168,16 +232,21 @@ Result<Encoded> encodeScene(const storage::SceneFile& file, const CodecVariant& 
                 const storage::PositionGrid grid,
                 storage::PositionGrid::covering(h.boundsMin, h.boundsMax, variant.bits));
         std::vector<std::byte> bytes;
+        PagePacker pages(pageSize, encoded); // one prototype's clusters share pages
         FF_RETURN_IF_ERROR(forEachLeaf(
                 file,
                 h.root,
                 variant.leafTriangles,
+                encoded.v2Nodes,
                 [&](std::span<const storage::PackedTriangle> t) -> Status {
                     ++encoded.leaves;
+                    const std::size_t first = bytes.size();
                     FF_ASSIGN_OR_RETURN(
                             const builder::ClusterBuildStats stats, encoder.encode(t, grid, bytes));
                     encoded.stats += stats;
-                    return Status::ok();
+                    return pages.add(
+                            std::span<const std::byte>(bytes).subspan(first),
+                            static_cast<std::uint32_t>(stats.clusters));
                 }));
         if (!bytes.empty()) {
             encoded.maxError = std::max(encoded.maxError, grid.maxError());
@@ -326,6 +395,9 @@ Status runCodec(const CodecParams& p, const Scenario& scenario, const BenchOptio
              "cluster_bytes",
              "bytes_per_triangle",
              "v1_file_bytes_per_triangle",
+             "v2_nodes",
+             "v2_pages",
+             "v2_estimate_bytes_per_triangle",
              "max_position_error",
              "extent",
              "encode_seconds",
@@ -363,7 +435,7 @@ Status runCodec(const CodecParams& p, const Scenario& scenario, const BenchOptio
                     scenario.name.c_str(),
                     s.label.c_str(),
                     v.label.c_str());
-            FF_ASSIGN_OR_RETURN(const Encoded encoded, encodeScene(*file, v));
+            FF_ASSIGN_OR_RETURN(const Encoded encoded, encodeScene(*file, v, p.pageSize));
             FF_ASSIGN_OR_RETURN(const DecodeRate rate, timeDecode(encoded, p.decodeSeconds));
             const auto& st = encoded.stats;
             const double kept = static_cast<double>(std::max<std::uint64_t>(st.trianglesKept, 1));
@@ -386,6 +458,15 @@ Status runCodec(const CodecParams& p, const Scenario& scenario, const BenchOptio
                      std::to_string(st.encodedBytes),
                      formatNumber(static_cast<double>(st.encodedBytes) / kept, 3),
                      formatNumber(v1, 2),
+                     std::to_string(encoded.v2Nodes),
+                     std::to_string(encoded.v2Pages),
+                     formatNumber(
+                             static_cast<double>(
+                                     encoded.v2Pages * p.pageSize +
+                                     encoded.v2Nodes * storage::kNodeRecordV2Size +
+                                     encoded.v2Representations * storage::kRepresentationRecordSize) /
+                                     static_cast<double>(std::max<std::uint64_t>(stored, 1)),
+                             3),
                      formatNumber(encoded.maxError, 9),
                      formatNumber(extent, 3),
                      formatNumber(encoded.encodeSeconds, 3),
@@ -436,7 +517,11 @@ Status runCodec(const CodecParams& p, const Scenario& scenario, const BenchOptio
           "cluster bytes / "
           "triangles kept (node records and page slack not counted; v1_file_bytes_per_triangle is "
           "the whole v1 file "
-          "over its stored triangles). max_position_error: the grid's bound, scene units.\n\n"
+          "over its stored triangles). v2_estimate_bytes_per_triangle: the clusters packed into "
+       << p.pageSize
+       << "-byte cluster pages as a v2 writer would, plus a 48-byte record per node of the cut "
+          "hierarchy and a 20-byte representation per payload and page, over the stored triangles. "
+          "max_position_error: the grid's bound, scene units.\n\n"
        << table.markdown() << "\n";
     if (haveDraco && draco.rowCount() > 0) {
         const std::filesystem::path dracoCsv = options.outDir / (scenario.name + "-draco.csv");
@@ -504,6 +589,12 @@ Result<BenchRun> prepareCodec(const Scenario& scenario) {
     if (p.variants.empty())
         reader.fail("variants", "needs at least one variant");
     p.decodeSeconds = reader.number("decode_seconds", 1.0);
+    const double pageSize = reader.number("page_size", storage::kDefaultPageSize);
+    if (pageSize >= storage::kMinPageSize && pageSize <= storage::kMaxPageSize &&
+        storage::isValidPageSize(static_cast<std::uint32_t>(pageSize)))
+        p.pageSize = static_cast<std::uint32_t>(pageSize);
+    else
+        reader.fail("page_size", "must be a power of two from 4096 to 16 MiB");
     FF_RETURN_IF_ERROR(reader.finish());
     return BenchRun(
             [p, scenario](const BenchOptions& options) { return runCodec(p, scenario, options); });

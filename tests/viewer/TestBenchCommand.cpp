@@ -344,7 +344,8 @@ TEST(BenchCommandTest, CodecScenarioEncodesTheLeavesOfABuildAndDecodesThemAgain)
   "kind": "codec",
   "scenes": [{"label": "terrain", "generate": "terrain:triangles=20000"}],
   "variants": [{"leaf_triangles": 0}, {"leaf_triangles": 4096}],
-  "decode_seconds": 0.05
+  "decode_seconds": 0.05,
+  "page_size": 16384
 })");
     const fs::path out = dir / "out";
     const ProcessResult r = runFarfield({"bench", (dir / "tiny-codec.json").string(), "--out", out.string()}, dir);
@@ -358,6 +359,16 @@ TEST(BenchCommandTest, CodecScenarioEncodesTheLeavesOfABuildAndDecodesThemAgain)
     }
     EXPECT_GT(std::stoull(cell(rows, 1, "leaves")), std::stoull(cell(rows, 2, "leaves")));
     EXPECT_LT(std::stod(cell(rows, 2, "bytes_per_triangle")), std::stod(cell(rows, 1, "bytes_per_triangle")));
+    // The v2 estimate adds page slack, records and representations to the clusters' bytes; the
+    // hierarchy cut at 4096 triangles has far fewer nodes, so it stays near its clusters.
+    for (std::size_t i = 1; i < rows.size(); ++i) {
+        const double clusters = std::stod(cell(rows, i, "bytes_per_triangle"));
+        const double v2 = std::stod(cell(rows, i, "v2_estimate_bytes_per_triangle"));
+        EXPECT_GT(v2, clusters);
+        EXPECT_GT(std::stoull(cell(rows, i, "v2_pages")), 1u);
+    }
+    EXPECT_LT(std::stoull(cell(rows, 2, "v2_nodes")) * 20, std::stoull(cell(rows, 1, "v2_nodes")));
+    EXPECT_LT(std::stod(cell(rows, 2, "v2_estimate_bytes_per_triangle")), 2 * std::stod(cell(rows, 2, "bytes_per_triangle")));
     EXPECT_TRUE(fs::is_regular_file(out / "tiny-codec.png"));
     EXPECT_NE(readText(out / "tiny-codec.md").find("| terrain |"), std::string::npos);
 }
