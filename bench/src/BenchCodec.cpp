@@ -16,7 +16,9 @@
 #include <draco/compression/decode.h>
 #include <nlohmann/json.hpp>
 
+#include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
@@ -39,6 +41,9 @@ struct CodecScene {
 struct CodecVariant {
     std::string label;
     int bits = storage::kDefaultPositionGridBits;
+    /** > 0: the grid's step is the hierarchy's median triangle edge / edgeSteps (as many bits
+     *  as its extent then needs) instead of `bits` over the extent. */
+    double edgeSteps = 0.0;
     builder::ClusterLimits limits;
     std::uint64_t leafTriangles = 0; ///< 0: the v1 leaves; else subtrees this small made one leaf
 };
@@ -159,6 +164,7 @@ struct Encoded {
     double encodeSeconds = 0.0;
     float maxError = 0.0f; ///< the largest grid's bound, scene units
     std::uint64_t leaves = 0;
+    int gridBits = 0; ///< the most any hierarchy's grid took
     /** Format v2 as it would hold these hierarchies: their nodes (48-byte records), the payloads
      *  of their leaves packed into cluster pages, a 20-byte representation per payload and page. */
     std::uint64_t v2Nodes = 0;
@@ -219,6 +225,37 @@ private:
     std::optional<storage::ClusterPageWriter> mWriter;
 };
 
+/** The median edge length of the triangles below `root`'s hierarchy (0 if it has none). */
+Result<float> medianEdge(const storage::SceneFile& file, storage::NodeRef root) {
+    std::vector<float> edges;
+    std::uint64_t nodes = 0;
+    FF_RETURN_IF_ERROR(forEachLeaf(file, root, 0, nodes, [&](std::span<const storage::PackedTriangle> t) {
+        for (const storage::PackedTriangle& tri : t) {
+            for (int e = 0; e < 3; ++e) {
+                const auto& a = tri.vertices[static_cast<std::size_t>(e)].position;
+                const auto& b = tri.vertices[static_cast<std::size_t>((e + 1) % 3)].position;
+                edges.push_back(std::hypot(a[0] - b[0], a[1] - b[1], a[2] - b[2]));
+            }
+        }
+        return Status::ok();
+    }));
+    if (edges.empty())
+        return 0.0f;
+    const auto middle = edges.begin() + static_cast<std::ptrdiff_t>(edges.size() / 2);
+    std::nth_element(edges.begin(), middle, edges.end());
+    return *middle;
+}
+
+/** The variant's grid over one hierarchy: bits over its extent, or a step from its edges. */
+Result<storage::PositionGrid> gridFor(const storage::SceneFile& file, const Hierarchy& h, const CodecVariant& variant) {
+    if (variant.edgeSteps <= 0.0)
+        return storage::PositionGrid::covering(h.boundsMin, h.boundsMax, variant.bits);
+    FF_ASSIGN_OR_RETURN(const float edge, medianEdge(file, h.root));
+    if (!(edge > 0.0f)) // nothing below, or degenerate: any grid will do
+        return storage::PositionGrid::covering(h.boundsMin, h.boundsMax, variant.bits);
+    return storage::PositionGrid::withStep(h.boundsMin, h.boundsMax, static_cast<float>(edge / variant.edgeSteps));
+}
+
 Result<Encoded> encodeScene(const storage::SceneFile& file, const CodecVariant& variant, std::uint32_t pageSize) {
     std::vector<Hierarchy> hierarchies = {
             {file.header().root, file.header().boundsMin, file.header().boundsMax}};
@@ -228,9 +265,7 @@ Result<Encoded> encodeScene(const storage::SceneFile& file, const CodecVariant& 
     builder::ClusterEncoder encoder(variant.limits);
     const auto start = std::chrono::steady_clock::now();
     for (const Hierarchy& h : hierarchies) {
-        FF_ASSIGN_OR_RETURN(
-                const storage::PositionGrid grid,
-                storage::PositionGrid::covering(h.boundsMin, h.boundsMax, variant.bits));
+        FF_ASSIGN_OR_RETURN(const storage::PositionGrid grid, gridFor(file, h, variant));
         std::vector<std::byte> bytes;
         PagePacker pages(pageSize, encoded); // one prototype's clusters share pages
         FF_RETURN_IF_ERROR(forEachLeaf(
@@ -250,6 +285,7 @@ Result<Encoded> encodeScene(const storage::SceneFile& file, const CodecVariant& 
                 }));
         if (!bytes.empty()) {
             encoded.maxError = std::max(encoded.maxError, grid.maxError());
+            encoded.gridBits = std::max(encoded.gridBits, grid.bits);
             encoded.parts.emplace_back(grid, std::move(bytes));
         }
     }
@@ -442,7 +478,7 @@ Status runCodec(const CodecParams& p, const Scenario& scenario, const BenchOptio
             table.addRow(
                     {s.label,
                      v.label,
-                     std::to_string(v.bits),
+                     std::to_string(encoded.gridBits),
                      std::to_string(v.limits.maxVertices),
                      std::to_string(v.limits.maxTriangles),
                      std::to_string(v.leafTriangles),
@@ -565,6 +601,9 @@ Result<BenchRun> prepareCodec(const Scenario& scenario) {
     for (ScenarioReader& v : reader.objects("variants")) {
         CodecVariant variant;
         variant.bits = static_cast<int>(v.integer("bits", storage::kDefaultPositionGridBits));
+        variant.edgeSteps = v.number("edge_steps", 0.0);
+        if (!(variant.edgeSteps >= 0.0))
+            v.fail("edge_steps", "must be 0 (bits over the extent) or the steps a median edge spans");
         variant.limits.maxVertices = static_cast<std::uint32_t>(v.integer("max_vertices", 128));
         variant.limits.maxTriangles = static_cast<std::uint32_t>(v.integer("max_triangles", 256));
         const std::int64_t leaf = v.integer("leaf_triangles", 0);
@@ -574,7 +613,8 @@ Result<BenchRun> prepareCodec(const Scenario& scenario) {
         // No commas: labels are CSV cells.
         variant.label = v.string(
                 "label",
-                std::to_string(variant.bits) + "-bit grid; " +
+                (variant.edgeSteps > 0.0 ? "step edge/" + formatNumber(variant.edgeSteps, 0) + "; "
+                                          : std::to_string(variant.bits) + "-bit grid; ") +
                         std::to_string(variant.limits.maxVertices) + " v / " +
                         std::to_string(variant.limits.maxTriangles) + " t; " +
                         (leaf > 0 ? "leaves ≤ " + std::to_string(leaf) + " t" : "v1 leaves"));

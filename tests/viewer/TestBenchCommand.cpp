@@ -343,7 +343,7 @@ TEST(BenchCommandTest, CodecScenarioEncodesTheLeavesOfABuildAndDecodesThemAgain)
   "title": "A tiny codec scenario",
   "kind": "codec",
   "scenes": [{"label": "terrain", "generate": "terrain:triangles=20000"}],
-  "variants": [{"leaf_triangles": 0}, {"leaf_triangles": 4096}],
+  "variants": [{"leaf_triangles": 0}, {"leaf_triangles": 4096}, {"leaf_triangles": 4096, "edge_steps": 64}],
   "decode_seconds": 0.05,
   "page_size": 16384
 })");
@@ -351,7 +351,7 @@ TEST(BenchCommandTest, CodecScenarioEncodesTheLeavesOfABuildAndDecodesThemAgain)
     const ProcessResult r = runFarfield({"bench", (dir / "tiny-codec.json").string(), "--out", out.string()}, dir);
     ASSERT_EQ(r.exitCode, 0) << r.describe();
     const std::vector<Row> rows = readCsv(out / "tiny-codec.csv");
-    ASSERT_EQ(rows.size(), 3u);
+    ASSERT_EQ(rows.size(), 4u);
     for (std::size_t i = 1; i < rows.size(); ++i) {
         EXPECT_EQ(cell(rows, i, "triangles_kept"), cell(rows, i, "stored_triangles"));
         EXPECT_GT(std::stod(cell(rows, i, "decode_gb_per_s")), 0.0);
@@ -368,6 +368,11 @@ TEST(BenchCommandTest, CodecScenarioEncodesTheLeavesOfABuildAndDecodesThemAgain)
         EXPECT_GT(std::stoull(cell(rows, i, "v2_pages")), 1u);
     }
     EXPECT_LT(std::stoull(cell(rows, 2, "v2_nodes")) * 20, std::stoull(cell(rows, 1, "v2_nodes")));
+    // A step of a 64th of the median edge: far coarser than 20 bits over the terrain's extent,
+    // so fewer bits, a larger error and fewer bytes.
+    EXPECT_LT(std::stoi(cell(rows, 3, "grid_bits")), 20);
+    EXPECT_GT(std::stod(cell(rows, 3, "max_position_error")), std::stod(cell(rows, 2, "max_position_error")));
+    EXPECT_LT(std::stod(cell(rows, 3, "bytes_per_triangle")), std::stod(cell(rows, 2, "bytes_per_triangle")));
     EXPECT_LT(std::stod(cell(rows, 2, "v2_estimate_bytes_per_triangle")), 2 * std::stod(cell(rows, 2, "bytes_per_triangle")));
     EXPECT_TRUE(fs::is_regular_file(out / "tiny-codec.png"));
     EXPECT_NE(readText(out / "tiny-codec.md").find("| terrain |"), std::string::npos);
