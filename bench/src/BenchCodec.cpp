@@ -8,6 +8,7 @@
 
 #include <ff/bench/Benchmarks.h>
 #include <ff/builder/ClusterBuild.h>
+#include <ff/builder/GridChoice.h>
 #include <ff/storage/ClusterCodec.h>
 #include <ff/storage/ClusterPage.h>
 #include <ff/storage/NodeRecordV2.h>
@@ -225,35 +226,19 @@ private:
     std::optional<storage::ClusterPageWriter> mWriter;
 };
 
-/** The median edge length of the triangles below `root`'s hierarchy (0 if it has none). */
-Result<float> medianEdge(const storage::SceneFile& file, storage::NodeRef root) {
-    std::vector<float> edges;
-    std::uint64_t nodes = 0;
-    FF_RETURN_IF_ERROR(forEachLeaf(file, root, 0, nodes, [&](std::span<const storage::PackedTriangle> t) {
-        for (const storage::PackedTriangle& tri : t) {
-            for (int e = 0; e < 3; ++e) {
-                const auto& a = tri.vertices[static_cast<std::size_t>(e)].position;
-                const auto& b = tri.vertices[static_cast<std::size_t>((e + 1) % 3)].position;
-                edges.push_back(std::hypot(a[0] - b[0], a[1] - b[1], a[2] - b[2]));
-            }
-        }
-        return Status::ok();
-    }));
-    if (edges.empty())
-        return 0.0f;
-    const auto middle = edges.begin() + static_cast<std::ptrdiff_t>(edges.size() / 2);
-    std::nth_element(edges.begin(), middle, edges.end());
-    return *middle;
-}
-
-/** The variant's grid over one hierarchy: bits over its extent, or a step from its edges. */
-Result<storage::PositionGrid> gridFor(const storage::SceneFile& file, const Hierarchy& h, const CodecVariant& variant) {
+/** The variant's grid over one hierarchy: bits over its extent, or the builder's rule (a step
+ *  from its sampled median edge, builder::chooseGrid) at the variant's steps per edge. */
+Result<storage::PositionGrid>
+gridFor(const storage::SceneFile& file, const Hierarchy& h, const CodecVariant& variant) {
     if (variant.edgeSteps <= 0.0)
         return storage::PositionGrid::covering(h.boundsMin, h.boundsMax, variant.bits);
-    FF_ASSIGN_OR_RETURN(const float edge, medianEdge(file, h.root));
-    if (!(edge > 0.0f)) // nothing below, or degenerate: any grid will do
-        return storage::PositionGrid::covering(h.boundsMin, h.boundsMax, variant.bits);
-    return storage::PositionGrid::withStep(h.boundsMin, h.boundsMax, static_cast<float>(edge / variant.edgeSteps));
+    builder::EdgeSampler edges;
+    std::uint64_t nodes = 0;
+    FF_RETURN_IF_ERROR(forEachLeaf(file, h.root, 0, nodes, [&](std::span<const storage::PackedTriangle> t) {
+        edges.add(t);
+        return Status::ok();
+    }));
+    return builder::chooseGrid(h.boundsMin, h.boundsMax, edges, static_cast<float>(variant.edgeSteps));
 }
 
 Result<Encoded> encodeScene(const storage::SceneFile& file, const CodecVariant& variant, std::uint32_t pageSize) {
