@@ -194,6 +194,8 @@ struct PageCache::Impl {
         if (stats.residentBytes + bytes > budget) {
             // Decide before evicting anything: a page that cannot fit even after evicting every
             // page the current frame does not use is dropped, and nothing is evicted for it.
+            // (Pinned pages are found only while evicting: with pins, a page may be dropped
+            // after some eviction.)
             if (frameBytes + bytes > budget) {
                 entries.erase(it);
                 ++stats.dropped;
