@@ -22,17 +22,18 @@ Status ioError(int err, const std::string& what) {
     return {code, what + ": " + std::generic_category().message(err)};
 }
 
-} // namespace
-
-/** Reads bytes [offset, offset + out.size()) or fewer at the end of the file; how many. */
-Result<std::size_t> readAt(int fd, std::uint64_t offset, std::span<std::byte> out, const std::string& what) {
+/** Reads bytes [offset, offset + out.size()) or fewer at the end of the file; how many. `what`
+ *  (a function: the message is built only on error) names the read in an I/O error. */
+template <typename What>
+Result<std::size_t> readAt(int fd, std::uint64_t offset, std::span<std::byte> out, const What& what) {
     std::size_t done = 0;
     while (done < out.size()) {
         const ssize_t n = ::pread(fd, out.data() + done, out.size() - done, static_cast<off_t>(offset + done));
         if (n < 0) {
-            if (errno == EINTR)
+            const int err = errno; // before `what` allocates
+            if (err == EINTR)
                 continue;
-            return ioError(errno, what);
+            return ioError(err, what());
         }
         if (n == 0)
             break;
@@ -40,6 +41,8 @@ Result<std::size_t> readAt(int fd, std::uint64_t offset, std::span<std::byte> ou
     }
     return done;
 }
+
+} // namespace
 
 Result<std::unique_ptr<ScenePageSource>> ScenePageSource::open(const std::filesystem::path& path) {
     const std::string name = path.string();
@@ -54,7 +57,7 @@ Result<std::unique_ptr<ScenePageSource>> ScenePageSource::open(const std::filesy
     if (!S_ISREG(st.st_mode))
         return Status{ErrorCode::InvalidArgument, name + " is not a regular file"};
     const auto fileSize = static_cast<std::uint64_t>(st.st_size);
-    const std::string what = "cannot read scene file " + name;
+    const auto what = [&name] { return "cannot read scene file " + name; };
 
     // The layout as the mapped reader learns it (storage::probePageSize, checkPageLayout), from
     // our own descriptor: the per-page index and checksum catch a file replaced later.
@@ -102,25 +105,16 @@ Status ScenePageSource::readPage(std::uint64_t index, std::span<std::byte> out) 
                 ErrorCode::Corrupt,
                 "page " + std::to_string(index) + ": beyond end of file (the file has " +
                         std::to_string(mPageCount) + " pages)"};
-    const std::uint64_t base = index * mPageSize;
-    std::size_t done = 0;
-    while (done < out.size()) {
-        const ssize_t n =
-                ::pread(mFd, out.data() + done, out.size() - done, static_cast<off_t>(base + done));
-        if (n < 0) {
-            if (errno == EINTR)
-                continue;
-            return ioError(
-                    errno,
-                    "page " + std::to_string(index) + ": cannot read scene file " + mPath.string());
-        }
-        if (n == 0)
-            return Status{
-                    ErrorCode::Corrupt,
-                    "page " + std::to_string(index) +
-                            ": beyond end of file (the file shrank since it was opened)"};
-        done += static_cast<std::size_t>(n);
-    }
+    FF_ASSIGN_OR_RETURN(
+            const std::size_t got,
+            readAt(mFd, index * mPageSize, out, [&] {
+                return "page " + std::to_string(index) + ": cannot read scene file " + mPath.string();
+            }));
+    if (got != out.size())
+        return Status{
+                ErrorCode::Corrupt,
+                "page " + std::to_string(index) +
+                        ": beyond end of file (the file shrank since it was opened)"};
     return storage::verifyPageBytes(out, index);
 }
 
