@@ -190,24 +190,27 @@ public:
     Status add(std::span<const std::byte> clusters, std::uint32_t count) {
         if (count == 0)
             return Status::ok();
-        if (place(clusters, count))
+        if (place(clusters, count)) {
+            ++mCounts.v2Representations;
             return Status::ok();
+        }
         // Larger than a page: one cluster at a time, one representation per page it reaches.
-        std::uint32_t lastPage = ~0u;
+        std::uint64_t lastPage = ~std::uint64_t{0};
         while (!clusters.empty()) {
             FF_ASSIGN_OR_RETURN(const storage::ClusterInfo info, storage::readClusterInfo(clusters));
-            const std::uint64_t before = mCounts.v2Representations;
             if (!place(clusters.first(info.encodedBytes), 1))
                 return Status(ErrorCode::Internal, "a cluster larger than a page");
-            if (mCounts.v2Pages == lastPage)
-                mCounts.v2Representations = before; // the same page: the same representation
-            lastPage = static_cast<std::uint32_t>(mCounts.v2Pages);
+            if (mCounts.v2Pages != lastPage) // the open page is the v2Pages-th
+                ++mCounts.v2Representations;
+            lastPage = mCounts.v2Pages;
             clusters = clusters.subspan(info.encodedBytes);
         }
         return Status::ok();
     }
 
 private:
+    /** Appends to the open page, or to a new one when it does not fit; false if it cannot fit
+     *  even an empty page. */
     bool place(std::span<const std::byte> clusters, std::uint32_t count) {
         if (!mWriter || !mWriter->fits(clusters, count)) {
             if (mWriter && !mWriter->empty())
@@ -216,9 +219,7 @@ private:
             if (!mWriter->fits(clusters, count))
                 return false;
         }
-        const bool placed = mWriter->append(clusters, count).isOk();
-        mCounts.v2Representations += placed ? 1 : 0;
-        return placed;
+        return mWriter->append(clusters, count).isOk();
     }
 
     std::uint32_t mPageSize;
