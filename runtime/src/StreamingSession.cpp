@@ -71,7 +71,8 @@ struct StreamingSession::Impl {
     std::unique_ptr<storage::SceneFile> file;
     /** Streaming sessions: the index, read through the page source. */
     std::optional<storage::SceneIndex> streamedIndex;
-    const storage::SceneIndex* scene = nullptr; ///< one of the two
+    /** The scene's index: the mapped file's, or the one read through the source. */
+    const storage::SceneIndex& scene() const { return file ? *file : *streamedIndex; }
     std::shared_ptr<CountingSource> counting;
     std::unique_ptr<cache::PageCache> cache;
     std::unique_ptr<IPageAccess> pages;
@@ -132,7 +133,6 @@ StreamingSession::open(const std::filesystem::path& scenePath, const SessionOpti
     }
     auto impl = std::make_unique<Impl>();
     FF_ASSIGN_OR_RETURN(impl->file, storage::SceneFile::open(scenePath));
-    impl->scene = impl->file.get();
     impl->pages = std::make_unique<MappedPageAccess>(*impl->file);
     FF_RETURN_IF_ERROR(impl->startDrawing(options));
     return std::unique_ptr<StreamingSession>(new StreamingSession(std::move(impl)));
@@ -153,8 +153,7 @@ StreamingSession::open(std::shared_ptr<storage::IPageSource> source, const Sessi
     auto impl = std::make_unique<Impl>();
     // The index before the cache: it is read once, at open, and stays outside the budget.
     FF_ASSIGN_OR_RETURN(impl->streamedIndex, storage::SceneIndex::read(*source));
-    impl->scene = &*impl->streamedIndex;
-    const storage::SceneIndex& scene = *impl->scene;
+    const storage::SceneIndex& scene = impl->scene();
     impl->counting = std::make_shared<CountingSource>(std::move(source));
     cache::PageCacheOptions cacheOptions;
     cacheOptions.budgetBytes = options.cacheBytes;
@@ -180,16 +179,16 @@ StreamingSession::open(std::shared_ptr<storage::IPageSource> source, const Sessi
 }
 
 Status StreamingSession::Impl::startDrawing(const SessionOptions& options) {
-    traversal = std::make_unique<BackToFrontTraversal>(*scene, *pages);
-    occlusionTraversal = std::make_unique<OcclusionTraversal>(*scene, *pages);
-    prefetchTraversal = std::make_unique<BackToFrontTraversal>(*scene, *pages);
+    traversal = std::make_unique<BackToFrontTraversal>(scene(), *pages);
+    occlusionTraversal = std::make_unique<OcclusionTraversal>(scene(), *pages);
+    prefetchTraversal = std::make_unique<BackToFrontTraversal>(scene(), *pages);
     rendererOptions = options.renderer;
-    FF_ASSIGN_OR_RETURN(renderer, Renderer::create(*scene, options.renderer));
+    FF_ASSIGN_OR_RETURN(renderer, Renderer::create(scene(), options.renderer));
     return Status::ok();
 }
 
 const storage::SceneIndex& StreamingSession::scene() const noexcept {
-    return *mImpl->scene;
+    return mImpl->scene();
 }
 bool StreamingSession::streams() const noexcept {
     return mImpl->cache != nullptr;
@@ -289,7 +288,7 @@ void StreamingSession::Impl::record(
     t.prefetchMs = prefetchMs;
     t.stats = stats;
     t.stalled = stalled;
-    if (const std::uint64_t total = scene->header().instancedTriangles; total > 0)
+    if (const std::uint64_t total = scene().header().instancedTriangles; total > 0)
         t.renderRatePercent =
                 100.0 * static_cast<double>(stats.trianglesDrawn) / static_cast<double>(total);
     t.gpuResidentBytes = renderer->residentBytes();
@@ -309,8 +308,8 @@ void StreamingSession::Impl::record(
         t.refused = now.refused - previous.refused;
         t.noRoom = now.noRoom - previous.noRoom;
         const FramePageUse& used = cachedPages->framePageUse();
-        t.nodePageBytes = used.nodePages * scene->pageSize();
-        t.geometryPageBytes = used.geometryPages * scene->pageSize();
+        t.nodePageBytes = used.nodePages * scene().pageSize();
+        t.geometryPageBytes = used.geometryPages * scene().pageSize();
         previous = now;
     }
     last = t;
@@ -488,7 +487,7 @@ Status StreamingSession::setGpuBudget(std::uint64_t bytes) {
     Impl& s = *mImpl;
     s.renderer.reset(); // frees the old page arena before the new one is allocated
     s.rendererOptions.gpuBudgetBytes = bytes;
-    FF_ASSIGN_OR_RETURN(s.renderer, Renderer::create(*s.scene, s.rendererOptions));
+    FF_ASSIGN_OR_RETURN(s.renderer, Renderer::create(s.scene(), s.rendererOptions));
     return Status::ok();
 }
 
@@ -510,7 +509,7 @@ SessionTotals StreamingSession::totals() const {
     t.evicted = c.evicted;
     t.dropped = c.dropped;
     t.bytesRead = c.bytesRead;
-    t.uniqueBytes = s.counting->uniquePages() * s.scene->pageSize();
+    t.uniqueBytes = s.counting->uniquePages() * s.scene().pageSize();
     t.peakResidentBytes = s.peakResidentBytes;
     t.budgetBytes = s.cache->budgetBytes();
     return t;
