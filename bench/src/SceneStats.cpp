@@ -198,6 +198,8 @@ std::uint64_t SceneStats::representedBytes() const noexcept {
 }
 
 Result<SceneStats> collectSceneStats(const storage::SceneFile& scene) {
+    if (scene.formatVersion() != storage::kFormatVersion)
+        return Status(ErrorCode::Unsupported, "stats reads format version 1 files; `farfield check` reports a version 2 file's contents");
     FF_RETURN_IF_ERROR(scene.verifyAll());
     SceneStats s;
     const storage::FileHeader& header = scene.header();

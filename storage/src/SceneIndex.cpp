@@ -2,6 +2,7 @@
 #include "SectionTable.h"
 
 #include <ff/storage/PageCheck.h>
+#include <ff/storage/PrototypeRecordV2.h>
 #include <ff/storage/SceneIndex.h>
 #include <ff/storage/SceneWriter.h>
 
@@ -29,12 +30,12 @@ Result<std::uint32_t> probePageSize(std::span<const std::byte> start, std::uint6
         return corrupt(0, "bad magic (not a farfield scene file)");
     if (start.size() < sizeof(FileHeader))
         return corrupt(0, truncatedMessage(fileSize));
-    if (header.formatVersion != kFormatVersion)
+    if (header.formatVersion != kFormatVersion && header.formatVersion != kFormatVersion2)
         return Status{
                 ErrorCode::Unsupported,
                 "page 0: format version " + std::to_string(header.formatVersion) +
-                        " is not supported (this build reads version " +
-                        std::to_string(kFormatVersion) + ")"};
+                        " is not supported (this build reads versions " +
+                        std::to_string(kFormatVersion) + " and " + std::to_string(kFormatVersion2) + ")"};
     if (!isValidPageSize(header.pageSize))
         return corrupt(0, "invalid page size " + std::to_string(header.pageSize));
     if (fileSize < header.pageSize)
@@ -95,29 +96,34 @@ Result<SceneIndex> SceneIndex::read(IPageSource& source) {
 
 Status SceneIndex::readHeader(std::span<const std::byte> page0) {
     std::memcpy(&mHeader, page0.data(), sizeof(FileHeader));
+    const std::uint32_t version = mHeader.formatVersion; // 1 or 2: probePageSize checked it
+    const StructSizes sizes = structSizesOf(version);
     const struct {
         const char* name;
         std::uint32_t stored;
         std::size_t expected;
     } structSizes[] = {
-            {"headerSize", mHeader.headerSize, sizeof(FileHeader)},
-            {"sectionEntrySize", mHeader.sectionEntrySize, sizeof(SectionEntry)},
-            {"nodeRecordSize", mHeader.nodeRecordSize, sizeof(NodeRecord)},
-            {"triangleSize", mHeader.triangleSize, sizeof(PackedTriangle)},
-            {"prototypeRecordSize", mHeader.prototypeRecordSize, sizeof(PrototypeRecord)},
-            {"instanceRecordSize", mHeader.instanceRecordSize, sizeof(InstanceRecord)},
+            {"headerSize", mHeader.headerSize, sizes.header},
+            {"sectionEntrySize", mHeader.sectionEntrySize, sizes.sectionEntry},
+            {"nodeRecordSize", mHeader.nodeRecordSize, sizes.nodeRecord},
+            {version == kFormatVersion2 ? "representationRecordSize" : "triangleSize",
+             mHeader.triangleSize,
+             sizes.triangleOrRepresentation},
+            {"prototypeRecordSize", mHeader.prototypeRecordSize, sizes.prototypeRecord},
+            {"instanceRecordSize", mHeader.instanceRecordSize, sizes.instanceRecord},
     };
     for (const auto& s : structSizes) {
         if (s.stored != s.expected)
             return corrupt(
                     0,
                     std::string(s.name) + " is " + std::to_string(s.stored) + ", version " +
-                            std::to_string(kFormatVersion) + " has " + std::to_string(s.expected));
+                            std::to_string(version) + " has " + std::to_string(s.expected));
     }
-    if (mHeader.flags != 0)
+    const std::uint32_t knownFlags = version == kFormatVersion2 ? kFileV2HasRoot : 0u;
+    if ((mHeader.flags & ~knownFlags) != 0)
         return {ErrorCode::Unsupported, "page 0: unknown header flags " + hex(mHeader.flags)};
 
-    mNodesPerPage = nodesPerPage(pageSize());
+    mNodesPerPage = version == kFormatVersion2 ? nodesPerPageV2(pageSize()) : nodesPerPage(pageSize());
     mTrianglesPerPage = trianglesPerPage(pageSize());
     if (mHeader.sectionCount > maxSectionCount(pageSize()))
         return corrupt(
@@ -130,10 +136,14 @@ Status SceneIndex::readHeader(std::span<const std::byte> page0) {
                 mSections.data(),
                 page0.data() + sizeof(FileHeader),
                 mSections.size() * sizeof(SectionEntry));
-    if (std::string problem = findSectionTableProblem(mSections, pageCount(), pageSize());
+    if (std::string problem = findSectionTableProblem(mSections, pageCount(), pageSize(), version);
         !problem.empty())
         return corrupt(0, problem);
-    if (mHeader.root != kNullNodeRef && !nodeRefInFile(mHeader.root))
+    if (version == kFormatVersion2) {
+        // The root is a node index, checked once the NodePages section is read.
+        if (mHeader.root.slot != 0)
+            return corrupt(0, "root field's second word is " + std::to_string(mHeader.root.slot) + ", version 2 has 0");
+    } else if (mHeader.root != kNullNodeRef && !nodeRefInFile(mHeader.root))
         return corrupt(
                 0,
                 "root node (page " + std::to_string(mHeader.root.page) + ", slot " +
@@ -148,19 +158,25 @@ Status SceneIndex::readStream(
     const std::uint64_t payload = pagePayloadBytes(pageSize());
     out.resize(static_cast<std::size_t>(s.byteLength));
     std::uint64_t at = 0;
+    std::uint64_t skip = streamOffset(s); // < payload: the section table rules checked it
     for (std::uint64_t p = 0; p < s.pageCount; ++p) {
         FF_ASSIGN_OR_RETURN(const PagePin page, source.pinPage(s.firstPage + p));
         FF_RETURN_IF_ERROR(checkType(
                 readTrailer(page.bytes()).pageType, s.firstPage + p, maskOf(PageType::Table)));
-        const std::uint64_t n = std::min(payload, s.byteLength - at);
-        std::memcpy(out.data() + at, page.bytes().data(), static_cast<std::size_t>(n));
+        const std::uint64_t n = std::min(payload - skip, s.byteLength - at);
+        std::memcpy(out.data() + at, page.bytes().data() + skip, static_cast<std::size_t>(n));
         at += n;
+        skip = 0;
     }
     return Status::ok();
 }
 
+std::uint64_t SceneIndex::streamOffset(const SectionEntry& s) const noexcept {
+    return formatVersion() == kFormatVersion2 ? s.offset : 0; // v1: a reserved field, ignored
+}
+
 std::uint64_t SceneIndex::streamPage(const SectionEntry& s, std::uint64_t offset) const noexcept {
-    return s.firstPage + offset / pagePayloadBytes(pageSize());
+    return s.firstPage + (streamOffset(s) + offset) / pagePayloadBytes(pageSize());
 }
 
 Status SceneIndex::readTables(IPageSource& source) {
@@ -170,6 +186,19 @@ Status SceneIndex::readTables(IPageSource& source) {
         switch (static_cast<SectionType>(s.type)) {
         case SectionType::Prototypes: {
             FF_RETURN_IF_ERROR(readStream(source, s, stream));
+            if (formatVersion() == kFormatVersion2) {
+                mPrototypesV2.reserve(static_cast<std::size_t>(s.itemCount));
+                for (std::size_t i = 0; i < s.itemCount; ++i) {
+                    Result<PrototypeV2> p = decodePrototypeV2(
+                            std::span(stream).subspan(i * kPrototypeRecordV2Size, kPrototypeRecordV2Size));
+                    if (!p)
+                        return corrupt(
+                                streamPage(s, i * kPrototypeRecordV2Size),
+                                "prototype " + std::to_string(i) + ": " + p.status().message());
+                    mPrototypesV2.push_back(*p);
+                }
+                break;
+            }
             mPrototypes.resize(static_cast<std::size_t>(s.itemCount));
             if (!stream.empty())
                 std::memcpy(mPrototypes.data(), stream.data(), stream.size());
@@ -201,24 +230,76 @@ Status SceneIndex::readTables(IPageSource& source) {
             break;
         case SectionType::Hierarchy:
             break;
+        case SectionType::NodePages:
+            FF_RETURN_IF_ERROR(readStream(source, s, stream));
+            mNodePages.resize(static_cast<std::size_t>(s.itemCount));
+            if (!stream.empty())
+                std::memcpy(mNodePages.data(), stream.data(), stream.size());
+            for (std::size_t i = 0; i < mNodePages.size(); ++i) {
+                const std::uint32_t page = mNodePages[i];
+                const std::uint64_t at = streamPage(s, i * sizeof(std::uint32_t));
+                if (page == 0 || page >= pageCount() ||
+                    (allowedPageTypes(page) & maskOf(PageType::Nodes)) == 0)
+                    return corrupt(
+                            at,
+                            "node page " + std::to_string(i) + " is page " + std::to_string(page) +
+                                    ", not one that can hold nodes");
+                if (i > 0 && page <= mNodePages[i - 1])
+                    return corrupt(at, "node pages out of order (entry " + std::to_string(i) + ")");
+            }
+            break;
         }
     }
+    if (formatVersion() == kFormatVersion2)
+        FF_RETURN_IF_ERROR(checkRootsV2());
     // After the loop: the instance section may come before the prototype section.
     for (std::size_t i = 0; i < mInstances.size(); ++i) {
         const InstanceRecord& inst = mInstances[i];
         const std::uint64_t at = streamPage(*instanceSection, i * sizeof(InstanceRecord));
-        if (inst.prototype >= mPrototypes.size())
+        if (inst.prototype >= prototypeCount())
             return corrupt(
                     at,
                     "instance " + std::to_string(i) + " refers to prototype " +
                             std::to_string(inst.prototype) + ", the file has " +
-                            std::to_string(mPrototypes.size()));
+                            std::to_string(prototypeCount()));
         for (float f : inst.transform) {
             if (!std::isfinite(f))
                 return corrupt(at, "instance " + std::to_string(i) + ": non-finite transform");
         }
     }
     return Status::ok();
+}
+
+Status SceneIndex::checkRootsV2() const {
+    const std::uint64_t slots = nodeSlotCount();
+    if ((mHeader.flags & kFileV2HasRoot) != 0 && mHeader.root.page >= slots)
+        return corrupt(
+                0,
+                "root node " + std::to_string(mHeader.root.page) + " outside the file's " +
+                        std::to_string(slots) + " node slots");
+    for (std::size_t i = 0; i < mPrototypesV2.size(); ++i) {
+        if (mPrototypesV2[i].rootNode >= slots)
+            return corrupt(
+                    0,
+                    "prototype " + std::to_string(i) + ": root node " +
+                            std::to_string(mPrototypesV2[i].rootNode) + " outside the file's " +
+                            std::to_string(slots) + " node slots");
+    }
+    return Status::ok();
+}
+
+std::uint64_t SceneIndex::prototypeCount() const noexcept {
+    return formatVersion() == kFormatVersion2 ? mPrototypesV2.size() : mPrototypes.size();
+}
+
+Result<NodeRef> SceneIndex::nodeLocation(std::uint32_t nodeIndex) const {
+    const std::uint64_t ordinal = nodeIndex / mNodesPerPage;
+    if (formatVersion() != kFormatVersion2 || ordinal >= mNodePages.size())
+        return Status{
+                ErrorCode::Corrupt,
+                "node " + std::to_string(nodeIndex) + " outside the file's " +
+                        std::to_string(nodeSlotCount()) + " node slots"};
+    return NodeRef{mNodePages[ordinal], nodeIndex % mNodesPerPage};
 }
 
 std::uint32_t SceneIndex::allowedPageTypes(std::uint64_t index) const noexcept {
@@ -260,6 +341,8 @@ std::string SceneIndex::geometryRunProblem(const NodeRecord& node) const {
 }
 
 Result<NodeRecord> SceneIndex::decodeNode(std::span<const std::byte> payload, NodeRef ref) const {
+    if (formatVersion() != kFormatVersion)
+        return Status{ErrorCode::Unsupported, "version 2 nodes are read with readNodeV2 (NodePageV2.h)"};
     if (ref.slot >= mNodesPerPage ||
         payload.size() < std::size_t{mNodesPerPage} * sizeof(NodeRecord))
         return corrupt(
@@ -314,6 +397,8 @@ Result<NodeRecord> SceneIndex::decodeNode(std::span<const std::byte> payload, No
 
 Status
 SceneIndex::geometrySegments(const NodeRecord& node, std::vector<GeometrySegment>& out) const {
+    if (formatVersion() != kFormatVersion)
+        return Status{ErrorCode::Unsupported, "version 2 geometry is read through representations (NodePageV2.h)"};
     if (node.kind != static_cast<std::uint8_t>(NodeKind::Cell) || node.geometryCount == 0)
         return Status::ok();
     if (std::string problem = geometryRunProblem(node); !problem.empty())

@@ -61,6 +61,7 @@ struct SceneWriter::Impl {
     std::filesystem::path finalPath;
     std::filesystem::path tempPath;
     std::uint32_t pageSize = 0;
+    std::uint32_t formatVersion = kFormatVersion;
     int fd = -1;
     std::uint64_t nextPage = 1;     ///< page 0 is written by commit()
     std::uint64_t flushedPages = 1; ///< pages [1, flushedPages) are in the file
@@ -138,6 +139,11 @@ SceneWriter::create(const std::filesystem::path& finalPath, const SceneWriterOpt
     auto impl = std::make_unique<Impl>();
     impl->finalPath = finalPath;
     impl->pageSize = options.pageSize;
+    if (options.formatVersion != kFormatVersion && options.formatVersion != kFormatVersion2)
+        return Status{
+                ErrorCode::InvalidArgument,
+                "format version " + std::to_string(options.formatVersion) + " is not one this build writes"};
+    impl->formatVersion = options.formatVersion;
     impl->tempPath = finalPath;
     impl->tempPath += ".tmp-" + std::to_string(::getpid());
     impl->buffer.resize(std::max<std::size_t>(kWriteBufferBytes, options.pageSize));
@@ -157,6 +163,10 @@ SceneWriter::create(const std::filesystem::path& finalPath, const SceneWriterOpt
 
 std::uint32_t SceneWriter::pageSize() const noexcept {
     return mImpl->pageSize;
+}
+
+std::uint32_t SceneWriter::formatVersion() const noexcept {
+    return mImpl->formatVersion;
 }
 
 std::uint64_t SceneWriter::nextPageIndex() const noexcept {
@@ -204,13 +214,14 @@ Result<SectionEntry> SceneWriter::appendSection(
         SectionType type, std::span<const std::byte> bytes, std::uint64_t itemCount) {
     FF_RETURN_IF_ERROR(mImpl->usable());
     const auto typeValue = static_cast<std::uint32_t>(type);
+    const bool v2Section = type == SectionType::NodePages && mImpl->formatVersion >= kFormatVersion2;
     if (type != SectionType::Prototypes && type != SectionType::Instances &&
-        type != SectionType::Metadata)
+        type != SectionType::Metadata && !v2Section)
         return Status{
                 ErrorCode::InvalidArgument,
                 std::string("section type ") + sectionTypeName(typeValue) +
                         " has no byte stream; build its SectionEntry directly"};
-    const std::size_t recordSize = sectionRecordSize(typeValue);
+    const std::size_t recordSize = sectionRecordSize(typeValue, mImpl->formatVersion);
     if (recordSize != 0 &&
         (bytes.size() % recordSize != 0 || bytes.size() / recordSize != itemCount))
         return Status{
@@ -236,6 +247,47 @@ Result<SectionEntry> SceneWriter::appendSection(
     return entry;
 }
 
+Result<std::vector<SectionEntry>> SceneWriter::appendSections(std::span<const SectionStream> streams) {
+    FF_RETURN_IF_ERROR(mImpl->usable());
+    std::vector<SectionEntry> entries;
+    if (mImpl->formatVersion < kFormatVersion2) {
+        for (const SectionStream& s : streams) {
+            FF_ASSIGN_OR_RETURN(SectionEntry entry, appendSection(s.type, s.bytes, s.itemCount));
+            entries.push_back(entry);
+        }
+        return entries;
+    }
+    const std::uint64_t payload = pagePayloadBytes(mImpl->pageSize);
+    std::vector<std::byte> packed;
+    for (const SectionStream& s : streams) {
+        // The checks appendSection makes, on a stream that is not written yet.
+        const auto typeValue = static_cast<std::uint32_t>(s.type);
+        if (s.type == SectionType::Hierarchy)
+            return Status{ErrorCode::InvalidArgument, "a Hierarchy section has no byte stream"};
+        const std::size_t recordSize = sectionRecordSize(typeValue, mImpl->formatVersion);
+        if (recordSize != 0 && (s.bytes.size() % recordSize != 0 || s.bytes.size() / recordSize != s.itemCount))
+            return Status{
+                    ErrorCode::InvalidArgument,
+                    std::string(sectionTypeName(typeValue)) + " section: " + std::to_string(s.bytes.size()) +
+                            " bytes do not hold " + std::to_string(s.itemCount) + " records of " +
+                            std::to_string(recordSize) + " bytes"};
+        SectionEntry entry{};
+        entry.type = typeValue;
+        entry.firstPage = mImpl->nextPage + packed.size() / payload;
+        entry.offset = static_cast<std::uint32_t>(packed.size() % payload);
+        entry.byteLength = s.bytes.size();
+        entry.itemCount = s.itemCount;
+        entry.pageCount = s.bytes.empty() ? 0 : (entry.offset + s.bytes.size() + payload - 1) / payload;
+        packed.insert(packed.end(), s.bytes.begin(), s.bytes.end());
+        entries.push_back(entry);
+    }
+    for (std::size_t at = 0; at < packed.size(); at += payload) {
+        const std::size_t n = std::min<std::size_t>(payload, packed.size() - at);
+        FF_RETURN_IF_ERROR(appendPage(PageType::Table, std::span(packed).subspan(at, n)).status());
+    }
+    return entries;
+}
+
 Status SceneWriter::commit(FileHeader header, std::span<const SectionEntry> sections) {
     Impl& w = *mImpl;
     FF_RETURN_IF_ERROR(w.usable());
@@ -247,22 +299,23 @@ Status SceneWriter::commit(FileHeader header, std::span<const SectionEntry> sect
                 {ErrorCode::InvalidArgument,
                  "cannot commit " + w.finalPath.string() + ": " + std::to_string(sections.size()) +
                          " sections, page 0 holds at most " + std::to_string(maxSections)});
-    const std::string problem = findSectionTableProblem(sections, w.nextPage, w.pageSize);
+    const std::string problem = findSectionTableProblem(sections, w.nextPage, w.pageSize, w.formatVersion);
     if (!problem.empty())
         return w.fail(
                 {ErrorCode::InvalidArgument,
                  "cannot commit " + w.finalPath.string() + ": " + problem});
 
     header.magic = kFileMagic;
-    header.formatVersion = kFormatVersion;
+    header.formatVersion = w.formatVersion;
     header.pageSize = w.pageSize;
     header.pageCount = w.nextPage;
-    header.headerSize = sizeof(FileHeader);
-    header.sectionEntrySize = sizeof(SectionEntry);
-    header.nodeRecordSize = sizeof(NodeRecord);
-    header.triangleSize = sizeof(PackedTriangle);
-    header.prototypeRecordSize = sizeof(PrototypeRecord);
-    header.instanceRecordSize = sizeof(InstanceRecord);
+    const StructSizes sizes = structSizesOf(w.formatVersion);
+    header.headerSize = sizes.header;
+    header.sectionEntrySize = sizes.sectionEntry;
+    header.nodeRecordSize = sizes.nodeRecord;
+    header.triangleSize = sizes.triangleOrRepresentation;
+    header.prototypeRecordSize = sizes.prototypeRecord;
+    header.instanceRecordSize = sizes.instanceRecord;
     header.sectionCount = static_cast<std::uint32_t>(sections.size());
 
     FF_RETURN_IF_ERROR(w.flush());

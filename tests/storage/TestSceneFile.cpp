@@ -403,7 +403,7 @@ TEST_F(SceneFileTest, BadMagicIsRejected) {
 
 TEST_F(SceneFileTest, OtherFormatVersionsAreUnsupported) {
     const std::vector<std::byte> good = writeScene(kSmallPage);
-    for (std::uint32_t version : {0u, 2u, 0xFFFFFFFFu}) {
+    for (std::uint32_t version : {0u, 3u, 0xFFFFFFFFu}) {
         std::vector<std::byte> bytes = good;
         test::storeAt<std::uint32_t>(bytes, 8, version);
         test::writeBytes(mPath, bytes); // not resealed: the version is read before the checksum

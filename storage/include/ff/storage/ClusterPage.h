@@ -3,7 +3,7 @@
 // Format v2's geometry pages: clusters (ClusterCodec.h) back to back behind a 16-byte header that
 // names the prototype whose position grid they are quantized on. A node's payload is a run of
 // whole clusters inside one page, addressed by a representation record's (page, offset, length,
-// count). storage/FORMAT.md §6.4 documents every byte. Not yet written into files (format v1 is).
+// count). storage/FORMAT.md §6.4 documents every byte; `build --format 2` writes it.
 //
 // Free functions over bytes: indexing a page checks its header and every cluster's header, so
 // that decoding, which the cache's decode stage does for a whole page at once, never reads past

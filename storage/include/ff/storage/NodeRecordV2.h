@@ -3,7 +3,7 @@
 // Format v2's node record: 48 bytes with the 24-byte color cube inline (so a resident node can
 // always be drawn), bounds quantized outward relative to the parent's, children addressed by
 // one node index, and a representation table that names any number of payloads of any kind.
-// storage/FORMAT.md §5.3 documents every byte. Not yet written into files (format v1 is).
+// storage/FORMAT.md §5.3 documents every byte; `build --format 2` writes it (NodePageV2.h).
 //
 // Free functions over bytes: decoding checks every field; the bounds decode relative to the
 // parent's decoded bounds, which a top-down walk always holds.

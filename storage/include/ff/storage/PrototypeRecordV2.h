@@ -2,7 +2,7 @@
 
 // Format v2's prototype record: what v1's holds (root, bounds, counts) plus the position grid its
 // clusters are quantized on (ClusterCodec.h), which a reader needs before it decodes any of its
-// geometry pages. storage/FORMAT.md §4.4 documents every byte. Not yet written into files.
+// geometry pages. storage/FORMAT.md §4.4 documents every byte; `build --format 2` writes it.
 
 #include <ff/storage/ClusterCodec.h>
 #include <ff/storage/NodeRecordV2.h>

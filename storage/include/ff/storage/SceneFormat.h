@@ -7,6 +7,10 @@
 // Version history:
 //   1  first format: header page + section table, node pages, geometry pages, table pages;
 //      16-byte trailer with XXH3-64 checksum on every page.
+//   2  compact: 48-byte node records addressed by node index through a NodePages section, each
+//      node's representations in its Nodes page, geometry pages of clusters (ClusterPage.h),
+//      64-byte prototype records with the position grid. Written by `build --format 2`; the
+//      runtime does not draw it yet (storage reads and checks it).
 
 #include <array>
 #include <cstddef>
@@ -16,6 +20,7 @@ namespace ff::storage {
 
 inline constexpr std::array<char, 8> kFileMagic = {'F', 'F', 'S', 'C', 'E', 'N', 'E', '\0'};
 inline constexpr std::uint32_t kFormatVersion = 1;
+inline constexpr std::uint32_t kFormatVersion2 = 2;
 
 inline constexpr std::uint32_t kMinPageSize = 4096;
 inline constexpr std::uint32_t kMaxPageSize = 16u << 20;
@@ -54,16 +59,25 @@ enum class SectionType : std::uint32_t {
     Instances = 2,  ///< InstanceRecord[itemCount]
     Metadata = 3,   ///< UTF-8 JSON: scene description and build report
     Hierarchy = 4,  ///< the range of Nodes and Geometry pages (no byte stream; byteLength 0)
+    NodePages = 5,  ///< v2: u32[itemCount], the file page of each Nodes page, in node-index order
+};
+
+/** v2 header flags (v1 has none). */
+enum FileFlagsV2 : std::uint32_t {
+    kFileV2HasRoot = 1u << 0, ///< `root.page` is the node index of the instance level's root
 };
 
 /**
  * One entry of the section table in page 0. For table sections the bytes form one stream over
  * pages [firstPage, firstPage + pageCount): logical byte i lives in page firstPage + i / P at
- * offset i % P, with P = pagePayloadBytes(pageSize).
+ * offset i % P, with P = pagePayloadBytes(pageSize) (v2: shifted by `offset`).
  */
 struct SectionEntry {
     std::uint32_t type; ///< a SectionType
-    std::uint32_t reserved;
+    /** v1: reserved (0). v2: the payload offset in firstPage where a table section's stream
+     *  starts, so small sections share a page: byte i lives in page firstPage + (offset + i) / P
+     *  at (offset + i) % P. */
+    std::uint32_t offset;
     std::uint64_t firstPage;
     std::uint64_t pageCount;
     std::uint64_t byteLength;
@@ -179,12 +193,41 @@ struct InstanceRecord {
 };
 static_assert(sizeof(InstanceRecord) == 56);
 
+/** The struct sizes the header of a file of a format version states (its *Size fields): a reader
+ *  refuses a file whose fields say otherwise. v2 keeps the field layout; its `triangleSize`
+ *  field holds the representation record's size (FORMAT.md §3.1). */
+struct StructSizes {
+    std::uint32_t header = 0;
+    std::uint32_t sectionEntry = 0;
+    std::uint32_t nodeRecord = 0;
+    std::uint32_t triangleOrRepresentation = 0;
+    std::uint32_t prototypeRecord = 0;
+    std::uint32_t instanceRecord = 0;
+};
+constexpr StructSizes structSizesOf(std::uint32_t formatVersion) noexcept {
+    if (formatVersion == kFormatVersion2)
+        return {sizeof(FileHeader), sizeof(SectionEntry), 48, 20, 64, sizeof(InstanceRecord)};
+    return {sizeof(FileHeader),
+            sizeof(SectionEntry),
+            sizeof(NodeRecord),
+            sizeof(PackedTriangle),
+            sizeof(PrototypeRecord),
+            sizeof(InstanceRecord)};
+}
+
 /** Slots per page. */
 constexpr std::uint32_t nodesPerPage(std::uint32_t pageSize) noexcept {
     return pagePayloadBytes(pageSize) / static_cast<std::uint32_t>(sizeof(NodeRecord));
 }
 constexpr std::uint32_t trianglesPerPage(std::uint32_t pageSize) noexcept {
     return pagePayloadBytes(pageSize) / static_cast<std::uint32_t>(sizeof(PackedTriangle));
+}
+
+/** v2: node slots per Nodes page (48-byte records; the page's representations share its
+ *  payload from the end, so a page may use fewer). Node index n is slot n mod this of the
+ *  NodePages section's entry n / this. */
+constexpr std::uint32_t nodesPerPageV2(std::uint32_t pageSize) noexcept {
+    return pagePayloadBytes(pageSize) / 48u;
 }
 
 constexpr bool isValidPageSize(std::uint32_t pageSize) noexcept {

@@ -7,6 +7,7 @@
 // they came from (a mapping, the page cache). FORMAT.md §9 lists the rules.
 
 #include <ff/storage/PageSource.h>
+#include <ff/storage/PrototypeRecordV2.h>
 #include <ff/storage/SceneFormat.h>
 #include <ff/storage/Status.h>
 
@@ -65,14 +66,27 @@ public:
     std::span<const SectionEntry> sections() const noexcept { return mSections; }
     std::uint32_t pageSize() const noexcept { return mHeader.pageSize; }
     std::uint64_t pageCount() const noexcept { return mHeader.pageCount; }
+    /** kFormatVersion or kFormatVersion2. */
+    std::uint32_t formatVersion() const noexcept { return mHeader.formatVersion; }
+    /** Version 1's prototypes (empty in a version 2 file: prototypesV2()). */
     const std::vector<PrototypeRecord>& prototypes() const noexcept { return mPrototypes; }
+    /** Version 2's prototypes, grids included (empty in a version 1 file). */
+    const std::vector<PrototypeV2>& prototypesV2() const noexcept { return mPrototypesV2; }
+    std::uint64_t prototypeCount() const noexcept;
+    /** Version 2: the file page of each Nodes page, in node-index order (the NodePages section). */
+    const std::vector<std::uint32_t>& nodePages() const noexcept { return mNodePages; }
+    /** Version 2: node indices the NodePages section spans (pages x nodesPerPageV2). */
+    std::uint64_t nodeSlotCount() const noexcept { return mNodePages.size() * std::uint64_t{mNodesPerPage}; }
+    /** Version 2: the page and slot of node `nodeIndex`. Errors: Corrupt outside the node slots. */
+    [[nodiscard]] Result<NodeRef> nodeLocation(std::uint32_t nodeIndex) const;
     const std::vector<InstanceRecord>& instances() const noexcept { return mInstances; }
     /** The Metadata section (JSON text), empty if the file has none. */
     const std::string& metadataJson() const noexcept { return mMetadata; }
 
-    /** Decodes and validates slot `ref.slot` of Nodes page `ref.page`, whose payload the caller
-     *  holds (a mapping, a page cache): kind, flags, finite and ordered boxes, children and
-     *  triangle runs inside the file, instance index in range. */
+    /** Version 1: decodes and validates slot `ref.slot` of Nodes page `ref.page`, whose payload
+     *  the caller holds (a mapping, a page cache): kind, flags, finite and ordered boxes,
+     *  children and triangle runs inside the file, instance index in range. Version 2 files'
+     *  nodes are read with readNodeV2 (Unsupported here). */
     [[nodiscard]] Result<NodeRecord>
     decodeNode(std::span<const std::byte> nodesPagePayload, NodeRef ref) const;
 
@@ -99,13 +113,18 @@ private:
     Status
     readStream(IPageSource& source, const SectionEntry& s, std::vector<std::byte>& out) const;
     std::uint64_t streamPage(const SectionEntry& s, std::uint64_t offset) const noexcept;
+    /** Where the section's stream starts in its first page (v2's offset; 0 in v1). */
+    std::uint64_t streamOffset(const SectionEntry& s) const noexcept;
     bool nodeRefInFile(NodeRef ref) const noexcept;
+    Status checkRootsV2() const;
     /** Why a Cell's triangle run leaves the file, or empty if it stays inside. */
     std::string geometryRunProblem(const NodeRecord& node) const;
 
     FileHeader mHeader{};
     std::vector<SectionEntry> mSections;
     std::vector<PrototypeRecord> mPrototypes;
+    std::vector<PrototypeV2> mPrototypesV2;
+    std::vector<std::uint32_t> mNodePages;
     std::vector<InstanceRecord> mInstances;
     std::string mMetadata;
     std::uint32_t mNodesPerPage = 0;

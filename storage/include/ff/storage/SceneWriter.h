@@ -7,11 +7,15 @@
 #include <filesystem>
 #include <memory>
 #include <span>
+#include <vector>
 
 namespace ff::storage {
 
 struct SceneWriterOptions {
     std::uint32_t pageSize = kDefaultPageSize; ///< power of two, see isValidPageSize()
+    /** kFormatVersion or kFormatVersion2: what commit() states in the header and which section
+     *  table rules apply. The pages' contents are the caller's. */
+    std::uint32_t formatVersion = kFormatVersion;
 };
 
 /**
@@ -33,6 +37,7 @@ public:
     SceneWriter& operator=(const SceneWriter&) = delete;
 
     std::uint32_t pageSize() const noexcept;
+    std::uint32_t formatVersion() const noexcept;
     /** Index the next appended page will get (page 0 is reserved for the header). */
     std::uint64_t nextPageIndex() const noexcept;
 
@@ -42,6 +47,18 @@ public:
      * IoError.
      */
     [[nodiscard]] Result<std::uint64_t> appendPage(PageType type, std::span<const std::byte> payload);
+
+    /** One table section's stream, for appendSections(). */
+    struct SectionStream {
+        SectionType type;
+        std::span<const std::byte> bytes;
+        std::uint64_t itemCount = 0;
+    };
+
+    /** Appends table sections: version 2 packs their streams back to back over shared Table
+     *  pages (small sections then cost one page together), version 1 gives each its own pages
+     *  (appendSection). Returns their table entries, in order. */
+    [[nodiscard]] Result<std::vector<SectionEntry>> appendSections(std::span<const SectionStream> streams);
 
     /** Appends `bytes` as a section stream over new Table pages; returns its table entry. */
     [[nodiscard]] Result<SectionEntry> appendSection(

@@ -1,0 +1,212 @@
+#include "ReaderChecks.h"
+
+#include <ff/storage/ClusterPage.h>
+#include <ff/storage/HierarchyCheck.h>
+#include <ff/storage/NodePageV2.h>
+
+#include <deque>
+#include <string>
+#include <unordered_map>
+#include <vector>
+
+namespace ff::storage {
+
+using detail::checkType;
+using detail::corrupt;
+using detail::maskOf;
+
+namespace {
+
+constexpr std::int64_t kInstanceLevel = -1;
+
+/** A node still to visit, with what it is read against. */
+struct Pending {
+    std::uint32_t node = 0;
+    NodeBox parent;
+    std::int64_t prototype = kInstanceLevel; ///< whose hierarchy; its grid decodes the clusters
+};
+
+/** The cluster pages met so far, indexed and decoded once each. */
+class ClusterPages {
+public:
+    ClusterPages(const SceneIndex& index, IPageSource& source)
+        : mIndex(index)
+        , mSource(source) {}
+
+    /** The run `r` names, checked: a cluster page of `prototype`, whole clusters. */
+    Result<std::uint64_t> trianglesOf(const RepresentationRecord& r, std::uint32_t prototype) {
+        if (r.page == 0 || r.page >= mIndex.pageCount())
+            return corrupt(r.page, "a representation names a page outside the file");
+        auto found = mPages.find(r.page);
+        if (found == mPages.end()) {
+            FF_ASSIGN_OR_RETURN(ClusterPageIndex page, indexPage(r.page));
+            found = mPages.emplace(r.page, std::move(page)).first;
+        }
+        const ClusterPageIndex& page = found->second;
+        if (page.prototype != prototype)
+            return corrupt(
+                    r.page,
+                    "clusters of prototype " + std::to_string(page.prototype) +
+                            " named by a node of prototype " + std::to_string(prototype));
+        Result<ClusterRun> run = findClusterRun(page.clusters, r.offset, r.length, r.count);
+        if (!run)
+            return corrupt(r.page, run.status().message());
+        std::uint64_t triangles = 0;
+        for (std::uint32_t c = 0; c < run->count; ++c)
+            triangles += page.clusters[run->first + c].info.triangleCount;
+        clusters += run->count;
+        return triangles;
+    }
+
+    std::uint64_t clusters = 0;
+    [[nodiscard]] std::uint64_t pages() const noexcept { return mPages.size(); }
+
+private:
+    Result<ClusterPageIndex> indexPage(std::uint64_t pageIndex) {
+        FF_ASSIGN_OR_RETURN(const PagePin pin, mSource.pinPage(pageIndex));
+        FF_RETURN_IF_ERROR(checkType(
+                readTrailer(pin.bytes()).pageType, pageIndex, maskOf(PageType::Geometry)));
+        const auto payload = pin.bytes().first(pagePayloadBytes(mIndex.pageSize()));
+        Result<ClusterPageIndex> page = indexClusterPage(payload, mIndex.pageSize());
+        if (!page)
+            return corrupt(pageIndex, page.status().message());
+        if (page->prototype >= mIndex.prototypesV2().size())
+            return corrupt(
+                    pageIndex,
+                    "clusters of prototype " + std::to_string(page->prototype) + ", the file has " +
+                            std::to_string(mIndex.prototypesV2().size()));
+        // Decoded once here, so a stream that indexes but does not decode is found too.
+        std::vector<PackedVertex> vertices(page->vertexCount);
+        std::vector<std::uint8_t> indices(page->indexCount);
+        const Status decoded = decodeClusterPage(
+                payload, *page, mIndex.prototypesV2()[page->prototype].grid, vertices, indices);
+        if (!decoded.isOk())
+            return corrupt(pageIndex, decoded.message());
+        // Indices only: the summary needs the cluster table, not the decoded bytes.
+        return page;
+    }
+
+    const SceneIndex& mIndex;
+    IPageSource& mSource;
+    std::unordered_map<std::uint64_t, ClusterPageIndex> mPages;
+};
+
+} // namespace
+
+Result<HierarchySummary> checkHierarchyV2(
+        const SceneIndex& index,
+        IPageSource& source,
+        const std::function<void(std::uint64_t done, std::uint64_t total)>& progress) {
+    if (index.formatVersion() != kFormatVersion2)
+        return Status(ErrorCode::InvalidArgument, "checkHierarchyV2 reads version 2 files");
+    const FileHeader& header = index.header();
+    const std::uint64_t slots = index.nodeSlotCount();
+    std::vector<bool> reached(static_cast<std::size_t>(slots), false);
+    std::vector<std::uint64_t> nodesOf(index.prototypesV2().size(), 0);
+    std::vector<std::uint64_t> trianglesOf(index.prototypesV2().size(), 0);
+
+    std::deque<Pending> pending;
+    if ((header.flags & kFileV2HasRoot) != 0)
+        pending.push_back(
+                {header.root.page, NodeBox{header.boundsMin, header.boundsMax}, kInstanceLevel});
+    for (std::size_t p = 0; p < index.prototypesV2().size(); ++p) {
+        const PrototypeV2& prototype = index.prototypesV2()[p];
+        pending.push_back({prototype.rootNode, prototype.bounds, static_cast<std::int64_t>(p)});
+    }
+
+    HierarchySummary summary;
+    ClusterPages clusterPages(index, source);
+    std::vector<RepresentationRecord> representations;
+    std::uint64_t heldPage = 0;
+    PagePin held; // consecutive nodes mostly share a page
+    while (!pending.empty()) {
+        const Pending at = pending.front();
+        pending.pop_front();
+        FF_ASSIGN_OR_RETURN(const NodeRef where, index.nodeLocation(at.node));
+        if (reached[at.node])
+            return corrupt(
+                    where.page,
+                    "node slot " + std::to_string(where.slot) +
+                            ": reached twice (a cycle or shared children)");
+        reached[at.node] = true;
+        if (held.empty() || heldPage != where.page) {
+            FF_ASSIGN_OR_RETURN(held, source.pinPage(where.page));
+            FF_RETURN_IF_ERROR(checkType(
+                    readTrailer(held.bytes()).pageType, where.page, maskOf(PageType::Nodes)));
+            heldPage = where.page;
+        }
+        const auto payload = held.bytes().first(pagePayloadBytes(index.pageSize()));
+        FF_ASSIGN_OR_RETURN(
+                const NodeV2 node, readNodeV2(payload, where.page, where.slot, at.parent));
+        ++summary.nodes;
+        if (at.prototype >= 0)
+            ++nodesOf[static_cast<std::size_t>(at.prototype)];
+        const std::string slot = "node slot " + std::to_string(where.slot) + ": ";
+
+        if (node.kind == NodeKindV2::Instance) {
+            if (at.prototype != kInstanceLevel)
+                return corrupt(where.page, slot + "an instance inside a prototype");
+            if (node.firstRepresentation >= index.instances().size())
+                return corrupt(
+                        where.page,
+                        slot + "instance " + std::to_string(node.firstRepresentation) +
+                                " out of range");
+        } else {
+            representations.clear();
+            FF_RETURN_IF_ERROR(readRepresentationsV2(payload, where.page, node, representations));
+            if (!representations.empty() && at.prototype == kInstanceLevel)
+                return corrupt(where.page, slot + "the instance level holds no payloads");
+            for (const RepresentationRecord& r : representations) {
+                if (r.kind != RepresentationKind::Clusters)
+                    return corrupt(
+                            where.page, slot + "a payload kind this version does not define");
+                FF_ASSIGN_OR_RETURN(
+                        const std::uint64_t triangles,
+                        clusterPages.trianglesOf(r, static_cast<std::uint32_t>(at.prototype)));
+                trianglesOf[static_cast<std::size_t>(at.prototype)] += triangles;
+                ++summary.representations;
+            }
+        }
+        if (node.childCount > 0) {
+            if (std::uint64_t{node.firstChild} + node.childCount > slots)
+                return corrupt(where.page, slot + "children outside the node slots");
+            // Children sit in one page: the first and last must be on the same one.
+            FF_ASSIGN_OR_RETURN(const NodeRef first, index.nodeLocation(node.firstChild));
+            FF_ASSIGN_OR_RETURN(
+                    const NodeRef last, index.nodeLocation(node.firstChild + node.childCount - 1u));
+            if (first.page != last.page)
+                return corrupt(where.page, slot + "children cross a page end");
+            for (std::uint32_t c = 0; c < node.childCount; ++c)
+                pending.push_back({node.firstChild + c, node.bounds, at.prototype});
+        }
+        if (progress && summary.nodes % 4096 == 0)
+            progress(summary.nodes, slots);
+    }
+
+    for (std::size_t p = 0; p < index.prototypesV2().size(); ++p) {
+        const PrototypeV2& prototype = index.prototypesV2()[p];
+        if (nodesOf[p] != prototype.nodeCount || trianglesOf[p] != prototype.triangleCount)
+            return corrupt(
+                    0,
+                    "prototype " + std::to_string(p) + " states " +
+                            std::to_string(prototype.nodeCount) + " nodes and " +
+                            std::to_string(prototype.triangleCount) +
+                            " triangles, its hierarchy holds " + std::to_string(nodesOf[p]) +
+                            " and " + std::to_string(trianglesOf[p]));
+        summary.triangles += trianglesOf[p];
+    }
+    if (summary.nodes != header.nodeCount || summary.triangles != header.storedTriangles)
+        return corrupt(
+                0,
+                "the header states " + std::to_string(header.nodeCount) + " nodes and " +
+                        std::to_string(header.storedTriangles) +
+                        " stored triangles, the hierarchies hold " + std::to_string(summary.nodes) +
+                        " and " + std::to_string(summary.triangles));
+    summary.clusters = clusterPages.clusters;
+    summary.clusterPages = clusterPages.pages();
+    if (progress)
+        progress(summary.nodes, slots);
+    return summary;
+}
+
+} // namespace ff::storage
