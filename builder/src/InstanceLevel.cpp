@@ -248,7 +248,8 @@ Result<InstanceLevelResult> buildInstanceLevel(
         const std::vector<storage::InstanceRecord>& instances,
         const std::vector<storage::PrototypeRecord>& prototypes,
         const std::vector<PrototypeSummary>& summaries,
-        const HierarchyParams& params) {
+        const HierarchyParams& params,
+        NodePageTable* nodePageTable) {
     if (instances.empty())
         return Status(ErrorCode::InvalidInput, "the scene has no triangles to draw");
     std::vector<PlacedInstance> placed(instances.size());
@@ -286,6 +287,22 @@ Result<InstanceLevelResult> buildInstanceLevel(
     result.boundsMin = nodes[0].boundsMin;
     result.boundsMax = nodes[0].boundsMax;
     result.depth = hierarchy.depth();
+    if (writer.formatVersion() == storage::kFormatVersion2) {
+        if (nodePageTable == nullptr)
+            return Status(ErrorCode::Internal, "a format 2 instance level without a node page table");
+        std::vector<std::uint64_t> drawn(instances.size());
+        for (std::size_t i = 0; i < instances.size(); ++i)
+            drawn[i] = prototypes[instances[i].prototype].triangleCount;
+        SubtreeV2Input input;
+        input.rootParent = {{result.boundsMin.x, result.boundsMin.y, result.boundsMin.z},
+                            {result.boundsMax.x, result.boundsMax.y, result.boundsMax.z}};
+        input.instanceTriangles = drawn;
+        FF_ASSIGN_OR_RETURN(const SubtreeV2Result written, writeSubtreeV2(writer, *nodePageTable, std::move(nodes), {}, input));
+        result.nodes = written.nodes;
+        result.nodePages = written.nodePages;
+        result.rootNode = written.rootNode;
+        return result;
+    }
     EncodedSubtree encoded = encodeSubtree(std::move(nodes), {}, writer.pageSize());
     result.nodes = encoded.nodeCount;
     result.nodePages = encoded.nodePages.size();

@@ -13,7 +13,8 @@
 namespace ff::builder {
 
 struct InstanceLevelResult {
-    storage::NodeRef root{};
+    storage::NodeRef root{};    ///< v1
+    std::uint32_t rootNode = 0; ///< v2: node index
     glm::vec3 boundsMin{0.0f};
     glm::vec3 boundsMax{0.0f};
     std::uint64_t nodes = 0;
@@ -33,7 +34,8 @@ struct InstanceLevelResult {
         const std::vector<storage::InstanceRecord>& instances,
         const std::vector<storage::PrototypeRecord>& prototypes,
         const std::vector<PrototypeSummary>& summaries,
-        const HierarchyParams& params);
+        const HierarchyParams& params,
+        NodePageTable* nodePageTable = nullptr);
 
 /** The glm matrix of a stored row-major 3x4 transform, and back. */
 glm::mat4 toMat4(const std::array<float, 12>& rowMajor3x4);

@@ -21,6 +21,7 @@ struct PrototypeCount {
 /** What the builder knows about a scene once the scan is done. */
 struct PageSizeInputs {
     std::vector<PrototypeCount> prototypes; ///< empty ones (no triangles) included
+    std::uint32_t formatVersion = 1;        ///< what the file is written as (storage::kFormatVersion*)
 };
 
 /** Payload bytes the scene will need, estimated from its counts (triangles, node records,
@@ -28,7 +29,8 @@ struct PageSizeInputs {
 std::uint64_t estimatePayloadBytes(const PageSizeInputs& inputs) noexcept;
 
 /** Partly filled pages a file has whatever its size: the header, the three table sections, and
- *  a last Nodes and a last Geometry page per prototype with triangles. */
+ *  a last Nodes and a last Geometry page per prototype with triangles (v2: four table
+ *  sections, one last Nodes page shared by all, a last Geometry page per prototype). */
 std::uint64_t fixedPartialPages(const PageSizeInputs& inputs) noexcept;
 
 /** Draw commands for drawing every instance whole once: per instance, one per geometry page

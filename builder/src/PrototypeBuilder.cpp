@@ -2,7 +2,9 @@
 
 #include "Decomposition.h"
 #include "HierarchyBuild.h"
+#include "LeafCollapse.h"
 #include "LevelRegions.h"
+#include "LevelRegionsV2.h"
 #include "Morton.h"
 #include "SubtreeEncoder.h"
 
@@ -21,6 +23,7 @@ namespace {
 
 struct ChunkOutput {
     LevelledSubtree encoded;
+    std::optional<ChunkClustersV2> clusters; ///< format 2: its clusters, its triangles freed
     PrototypeSummary summary;
     std::uint64_t leafNodes = 0;
 };
@@ -84,19 +87,27 @@ BuiltHierarchy buildInMemoryHierarchy(
     return out;
 }
 
-// Builds one chunk and lays it out level by level. Runs on worker threads.
-ChunkOutput buildChunk(
+// Builds one chunk and lays it out level by level; format 2 (`positionGrid` set) makes its small
+// subtrees leaves first and encodes its clusters. Runs on worker threads.
+Result<ChunkOutput> buildChunk(
         std::vector<storage::PackedTriangle> triangles,
         const Cell& cell,
         int level,
         int octant,
         const HierarchyParams& params,
-        const VoxelGrid* grid) {
+        const VoxelGrid* grid,
+        const storage::PositionGrid* positionGrid) {
     BuiltHierarchy built = buildInMemoryHierarchy(triangles, cell, level, octant, params, grid);
     ChunkOutput out;
     out.summary = std::move(built.summary);
     out.leafNodes = built.leafNodes;
+    if (positionGrid != nullptr)
+        collapseSmallSubtrees(built.nodes, triangles, params.clusterLeafTriangles);
     out.encoded = encodeLevels(std::move(built.nodes), std::move(triangles));
+    if (positionGrid != nullptr) {
+        FF_ASSIGN_OR_RETURN(ChunkClustersV2 clusters, encodeChunkClusters(out.encoded, *positionGrid));
+        out.clusters = std::move(clusters);
+    }
     return out;
 }
 
@@ -116,7 +127,8 @@ PrototypeBuilder::PrototypeBuilder(
         unsigned threads,
         std::filesystem::path tempDirectory,
         SpillCodec spillCodec,
-        std::function<void(const BuildProgress&)> progress)
+        std::function<void(const BuildProgress&)> progress,
+        NodePageTable* nodePageTable)
     : mWriter(writer)
     , mParams(params)
     // Below 2^32: the encoder orders a chunk's triangles through 32-bit indices (encodeLevels).
@@ -125,7 +137,8 @@ PrototypeBuilder::PrototypeBuilder(
     , mThreads(std::max(threads, 1u))
     , mTempDirectory(std::move(tempDirectory))
     , mSpillCodec(spillCodec)
-    , mProgress(std::move(progress)) {}
+    , mProgress(std::move(progress))
+    , mNodePageTable(nodePageTable) {}
 
 Result<PrototypeBuildResult> PrototypeBuilder::build(
         std::uint32_t prototypeId,
@@ -133,7 +146,11 @@ Result<PrototypeBuildResult> PrototypeBuilder::build(
         const glm::vec3& boundsMin,
         const glm::vec3& boundsMax,
         const VoxelGrid* grid,
+        const PrototypeEncodingV2* encoding,
         std::uint64_t& spillBytes) {
+    const bool v2 = mWriter.formatVersion() == storage::kFormatVersion2;
+    if (v2 && (encoding == nullptr || mNodePageTable == nullptr))
+        return Status(ErrorCode::Internal, "a format 2 build without a position grid or node page table");
     // The root cell is a cube around the bounds, a hair larger so no centroid sits on its max face.
     const glm::vec3 size = boundsMax - boundsMin;
     const float edge = std::max({size.x, size.y, size.z});
@@ -154,12 +171,14 @@ Result<PrototypeBuildResult> PrototypeBuilder::build(
     mGrid = mParams.decomposition == Decomposition::Orsd ? grid : nullptr;
 
     const std::uint64_t triangleCount = triangles.count(); // building consumes the run file
-    Result<PrototypeBuildResult> result = triangleCount <= mChunkTriangles
-            ? buildInMemory(triangles, root)
-            : buildChunked(prototypeId, triangles, root, spillBytes);
+    Result<PrototypeBuildResult> result = triangleCount > mChunkTriangles
+            ? buildChunked(prototypeId, triangles, root, encoding, spillBytes)
+            : v2 ? buildInMemoryV2(triangles, root, *encoding)
+                 : buildInMemory(triangles, root);
     if (!result)
         return result.status().withContext("prototype " + std::to_string(prototypeId));
-    result->record.triangleCount = triangleCount;
+    // v1 stores every triangle it was given; v2 those the codec kept (what it reports).
+    result->record.triangleCount = v2 ? result->recordV2.triangleCount : triangleCount;
     result->summary.rootCellSize = padded;
     return result;
 }
@@ -187,8 +206,102 @@ Result<PrototypeBuildResult> PrototypeBuilder::buildInMemory(RunFile& triangles,
     return result;
 }
 
+Result<PrototypeBuildResult> PrototypeBuilder::buildInMemoryV2(
+        RunFile& triangles, const Cell& root, const PrototypeEncodingV2& encoding) {
+    FF_ASSIGN_OR_RETURN(std::vector<storage::PackedTriangle> all, triangles.readAll());
+    triangles.remove();
+    BuiltHierarchy built = buildInMemoryHierarchy(all, root, 0, 0, mParams, mGrid);
+    const glm::vec3 boundsMin = built.nodes[0].boundsMin;
+    const glm::vec3 boundsMax = built.nodes[0].boundsMax;
+    SubtreeV2Input input;
+    input.prototype = encoding.storedIndex;
+    input.grid = &encoding.grid;
+    input.rootParent = {{boundsMin.x, boundsMin.y, boundsMin.z}, {boundsMax.x, boundsMax.y, boundsMax.z}};
+    input.leafTriangles = mParams.clusterLeafTriangles;
+    PrototypeBuildResult result;
+    result.summary = std::move(built.summary);
+    FF_ASSIGN_OR_RETURN(
+            const SubtreeV2Result written,
+            writeSubtreeV2(mWriter, *mNodePageTable, std::move(built.nodes), all, input));
+    result.nodes = written.nodes;
+    result.leafNodes = written.leafNodes;
+    result.geometryPages = written.geometryPages;
+    result.nodePages = written.nodePages;
+    result.maxDepth = written.maxLevel;
+    result.chunks = 1;
+    result.clusters = written.clusters;
+    result.record.boundsMin = input.rootParent.min;
+    result.record.boundsMax = input.rootParent.max;
+    result.record.nodeCount = written.nodes;
+    result.recordV2.rootNode = written.rootNode;
+    result.recordV2.bounds = input.rootParent;
+    result.recordV2.grid = encoding.grid;
+    result.recordV2.triangleCount = written.storedTriangles;
+    result.recordV2.nodeCount = written.nodes;
+    return result;
+}
+
+Result<PrototypeBuildResult> PrototypeBuilder::finishChunkedV2(
+        PrototypeBuildResult result,
+        std::vector<BuildNode> nodes,
+        std::vector<storage::PackedTriangle> ownTriangles,
+        const std::vector<std::int64_t>& chunkOf,
+        LevelRegionsV2& levels,
+        const PrototypeEncodingV2& encoding,
+        std::uint64_t& spillBytes) {
+    // The records below the chunk roots are stored relative to the roots' decoded bounds, so
+    // the tree above the chunks is settled (its small subtrees made leaves) before they are
+    // written, and written after them (it names where their children went).
+    collapseSmallSubtrees(nodes, ownTriangles, mParams.clusterLeafTriangles);
+    const glm::vec3 boundsMin = nodes[0].boundsMin;
+    const glm::vec3 boundsMax = nodes[0].boundsMax;
+    const storage::NodeBox rootParent{{boundsMin.x, boundsMin.y, boundsMin.z}, {boundsMax.x, boundsMax.y, boundsMax.z}};
+    const std::vector<storage::NodeBox> decoded = decodedBoxesV2(nodes, rootParent);
+    std::vector<storage::NodeBox> rootBoxes(result.chunks);
+    for (std::size_t n = 0; n < nodes.size(); ++n)
+        if (chunkOf[n] >= 0)
+            rootBoxes.at(static_cast<std::size_t>(chunkOf[n])) = decoded[n];
+    FF_RETURN_IF_ERROR(levels.finish(rootBoxes, [this](std::uint64_t done, std::uint64_t total) {
+        report("layout", done, total);
+    }));
+    std::vector<PlacedNodeV2> placed;
+    for (std::size_t n = 0; n < nodes.size(); ++n)
+        if (chunkOf[n] >= 0)
+            placed.push_back(levels.placedRoot(static_cast<std::size_t>(chunkOf[n]), static_cast<std::uint32_t>(n)));
+
+    SubtreeV2Input input;
+    input.prototype = encoding.storedIndex;
+    input.grid = &encoding.grid;
+    input.rootParent = rootParent;
+    input.leafTriangles = mParams.clusterLeafTriangles;
+    input.placed = placed;
+    FF_ASSIGN_OR_RETURN(
+            const SubtreeV2Result written,
+            writeSubtreeV2(mWriter, *mNodePageTable, std::move(nodes), ownTriangles, input));
+    result.clusters += written.clusters;
+    result.nodes = written.nodes + levels.nodes(); // the chunk roots are the tree above's
+    result.leafNodes = written.leafNodes + levels.leafNodes();
+    result.geometryPages = written.geometryPages + levels.geometryPages();
+    result.nodePages = written.nodePages + levels.nodePages();
+    result.maxDepth = std::max(written.maxLevel, levels.maxLevel());
+    spillBytes += levels.spillBytes();
+    result.record.boundsMin = rootParent.min;
+    result.record.boundsMax = rootParent.max;
+    result.record.nodeCount = result.nodes;
+    result.recordV2.rootNode = written.rootNode;
+    result.recordV2.bounds = rootParent;
+    result.recordV2.grid = encoding.grid;
+    result.recordV2.triangleCount = written.storedTriangles + levels.storedTriangles();
+    result.recordV2.nodeCount = result.nodes;
+    return result;
+}
+
 Result<PrototypeBuildResult> PrototypeBuilder::buildChunked(
-        std::uint32_t prototypeId, RunFile& triangles, const Cell& root, std::uint64_t& spillBytes) {
+        std::uint32_t prototypeId,
+        RunFile& triangles,
+        const Cell& root,
+        const PrototypeEncodingV2* encoding,
+        std::uint64_t& spillBytes) {
     // ---- count: triangles per cell at a level fine enough that cells fit a chunk -----------
     // A triangle is counted down to the cell it stops at (the first cell it is wider than, the
     // octree's large-triangle rule, with the same float cell sizes as octantCell()), so a cell
@@ -334,7 +447,12 @@ Result<PrototypeBuildResult> PrototypeBuilder::buildChunked(
     // pages level by level, as if it had been built in one piece.
     PrototypeBuildResult result;
     result.chunks = chunkNodes.size();
-    LevelRegions levels(mWriter, mTempDirectory, mSpillCodec, "proto" + std::to_string(prototypeId), mLevelExtentBytes);
+    const std::string prefix = "proto" + std::to_string(prototypeId);
+    LevelRegions levels(mWriter, mTempDirectory, mSpillCodec, prefix, mLevelExtentBytes);
+    std::optional<LevelRegionsV2> levelsV2;
+    if (encoding != nullptr)
+        levelsV2.emplace(mWriter, *mNodePageTable, mTempDirectory, mSpillCodec, prefix, encoding->storedIndex);
+    const storage::PositionGrid* positionGrid = encoding != nullptr ? &encoding->grid : nullptr;
     std::vector<BuildNode> chunkRoots(chunkNodes.size()); // for the top tree
     for (std::size_t begin = 0; begin < chunkNodes.size(); begin += mThreads) {
         const std::size_t end = std::min<std::size_t>(begin + mThreads, chunkNodes.size());
@@ -346,17 +464,22 @@ Result<PrototypeBuildResult> PrototypeBuilder::buildChunked(
             const int level = node.level;
             const int octant = node.octant;
             const HierarchyParams params = mParams;
-            running.push_back(std::async(std::launch::async, [file, cell, level, octant, params, grid = mGrid]() -> Result<ChunkOutput> {
+            running.push_back(std::async(std::launch::async, [file, cell, level, octant, params, grid = mGrid, positionGrid]() -> Result<ChunkOutput> {
                 FF_ASSIGN_OR_RETURN(std::vector<storage::PackedTriangle> chunkTriangles, file->readAll());
                 file->remove();
-                return buildChunk(std::move(chunkTriangles), cell, level, octant, params, grid);
+                return buildChunk(std::move(chunkTriangles), cell, level, octant, params, grid, positionGrid);
             }));
         }
         for (std::size_t c = begin; c < end; ++c) {
             Result<ChunkOutput> chunk = running[c - begin].get();
             if (!chunk)
                 return chunk.status();
-            FF_RETURN_IF_ERROR(levels.append(chunk->encoded));
+            if (levelsV2) {
+                result.clusters += chunk->clusters->stats;
+                FF_RETURN_IF_ERROR(levelsV2->append(chunk->encoded, *chunk->clusters));
+            }
+            else
+                FF_RETURN_IF_ERROR(levels.append(chunk->encoded));
             result.nodes += chunk->encoded.nodeCount + 1; // and its root
             result.leafNodes += chunk->leafNodes;
             result.maxDepth = std::max(result.maxDepth, chunk->encoded.maxLevel);
@@ -368,12 +491,15 @@ Result<PrototypeBuildResult> PrototypeBuilder::buildChunked(
             report("chunks", c + 1, chunkNodes.size());
         }
     }
-    FF_RETURN_IF_ERROR(levels.finish([this](std::uint64_t done, std::uint64_t total) {
+    const auto reportLayout = [this](std::uint64_t done, std::uint64_t total) {
         report("layout", done, total);
-    }));
-    result.geometryPages += levels.geometryPages();
-    result.nodePages += levels.nodePages();
-    spillBytes += levels.spillBytes();
+    };
+    if (!levelsV2) {
+        FF_RETURN_IF_ERROR(levels.finish(reportLayout));
+        result.geometryPages += levels.geometryPages();
+        result.nodePages += levels.nodePages();
+        spillBytes += levels.spillBytes();
+    }
 
     // ---- the top tree: cells above the chunks, composited from them --------------------------
     std::vector<BuildNode> nodes(top.size());
@@ -385,6 +511,8 @@ Result<PrototypeBuildResult> PrototypeBuilder::buildChunked(
         if (t.chunk >= 0) { // the chunk's root; its children and triangles are in the levels
             FF_ASSERT(t.own.empty()); // a chunk takes every triangle that reaches it
             n = std::move(chunkRoots[static_cast<std::size_t>(t.chunk)]);
+            if (levelsV2) // placed by LevelRegionsV2 once the tree above is known
+                continue;
             if (n.placedChildren)
                 n.placedChildren = levels.absoluteChildren(n.level + 1u, *n.placedChildren);
             if (n.placedTriangles)
@@ -431,6 +559,13 @@ Result<PrototypeBuildResult> PrototypeBuilder::buildChunked(
             addToSummary(nodes[i], result.summary);
     const glm::vec3 boundsMin = nodes[0].boundsMin;
     const glm::vec3 boundsMax = nodes[0].boundsMax;
+    if (levelsV2)
+    {
+        std::vector<std::int64_t> chunkOf(top.size());
+        for (std::size_t i = 0; i < top.size(); ++i)
+            chunkOf[i] = top[i].chunk;
+        return finishChunkedV2(std::move(result), std::move(nodes), std::move(ownTriangles), chunkOf, *levelsV2, *encoding, spillBytes);
+    }
     EncodedSubtree encoded = encodeSubtree(std::move(nodes), std::move(ownTriangles), mWriter.pageSize());
     result.geometryPages += encoded.geometryPageCount(mWriter.pageSize());
     result.nodePages += encoded.nodePages.size();

@@ -2,9 +2,11 @@
 
 #include "OctreeBuilder.h"
 #include "RunFile.h"
+#include "SubtreeEncoderV2.h"
 
 #include <ff/builder/ColorCube.h>
 #include <ff/builder/SceneBuilder.h>
+#include <ff/storage/PrototypeRecordV2.h>
 #include <ff/storage/SceneWriter.h>
 #include <ff/storage/Status.h>
 
@@ -15,6 +17,8 @@
 #include <vector>
 
 namespace ff::builder {
+
+class LevelRegionsV2;
 
 /** A prototype cell as the instance level sees it when baking its own cubes. */
 struct SummaryBox {
@@ -34,7 +38,9 @@ struct PrototypeSummary {
 };
 
 struct PrototypeBuildResult {
-    storage::PrototypeRecord record{};
+    storage::PrototypeRecord record{}; ///< v1's record; in a v2 build its root is not set
+    storage::PrototypeV2 recordV2{};   ///< a v2 build's record
+    ClusterBuildStats clusters;        ///< a v2 build's encoding
     PrototypeSummary summary;
     std::uint64_t nodes = 0;
     std::uint64_t leafNodes = 0;
@@ -42,6 +48,12 @@ struct PrototypeBuildResult {
     std::uint64_t chunks = 0;
     std::uint64_t geometryPages = 0;
     std::uint64_t nodePages = 0;
+};
+
+/** How a v2 build encodes one prototype's geometry. */
+struct PrototypeEncodingV2 {
+    storage::PositionGrid grid;      ///< its clusters' grid
+    std::uint32_t storedIndex = 0;   ///< its index in the file's Prototypes section
 };
 
 /** Bytes of memory the builder plans per triangle of a chunk (triangle, nodes, records). */
@@ -69,24 +81,43 @@ public:
             unsigned threads,
             std::filesystem::path tempDirectory,
             SpillCodec spillCodec,
-            std::function<void(const BuildProgress&)> progress = {});
+            std::function<void(const BuildProgress&)> progress = {},
+            NodePageTable* nodePageTable = nullptr);
 
     /** Builds and writes the prototype in `triangles` (consumed); `grid`: the voxel grid its
-     *  source declared, if any (ORSD needs one). Adds the bytes of the chunk
-     *  files it writes to `spillBytes`; the run file itself is the caller's to count. */
+     *  source declared, if any (ORSD needs one); `encoding`: how a v2 writer (the writer's
+     *  formatVersion()) encodes its clusters, null for v1. Adds the bytes of the
+     *  chunk files it writes to `spillBytes`; the run file itself is the caller's to count. */
     [[nodiscard]] Result<PrototypeBuildResult> build(
             std::uint32_t prototypeId,
             RunFile& triangles,
             const glm::vec3& boundsMin,
             const glm::vec3& boundsMax,
             const VoxelGrid* grid,
+            const PrototypeEncodingV2* encoding,
             std::uint64_t& spillBytes);
 
 private:
 
     [[nodiscard]] Result<PrototypeBuildResult> buildInMemory(RunFile& triangles, const Cell& root);
+    [[nodiscard]] Result<PrototypeBuildResult> buildInMemoryV2(
+            RunFile& triangles, const Cell& root, const PrototypeEncodingV2& encoding);
     [[nodiscard]] Result<PrototypeBuildResult> buildChunked(
-            std::uint32_t prototypeId, RunFile& triangles, const Cell& root, std::uint64_t& spillBytes);
+            std::uint32_t prototypeId,
+            RunFile& triangles,
+            const Cell& root,
+            const PrototypeEncodingV2* encoding,
+            std::uint64_t& spillBytes);
+    /** Format 2's end of a chunked build: the tree above the chunks (`chunkOf[n]`: the chunk
+     *  node n is the root of, or -1), then the chunks' level regions, then that tree. */
+    [[nodiscard]] Result<PrototypeBuildResult> finishChunkedV2(
+            PrototypeBuildResult result,
+            std::vector<BuildNode> nodes,
+            std::vector<storage::PackedTriangle> ownTriangles,
+            const std::vector<std::int64_t>& chunkOf,
+            LevelRegionsV2& levels,
+            const PrototypeEncodingV2& encoding,
+            std::uint64_t& spillBytes);
 
     storage::SceneWriter& mWriter;
     const HierarchyParams& mParams;
@@ -96,6 +127,7 @@ private:
     std::filesystem::path mTempDirectory;
     SpillCodec mSpillCodec;
     std::function<void(const BuildProgress&)> mProgress;
+    NodePageTable* mNodePageTable = nullptr; ///< a v2 build's Nodes pages
     const VoxelGrid* mGrid = nullptr; ///< ORSD: the grid of the prototype being built
 
     void report(const char* phase, std::uint64_t done, std::uint64_t total) const {

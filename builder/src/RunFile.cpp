@@ -296,5 +296,6 @@ void SpillFile<Item>::remove() noexcept {
 
 template class SpillFile<storage::PackedTriangle>;
 template class SpillFile<storage::NodeRecord>;
+template class SpillFile<PendingNodeV2>;
 
 } // namespace ff::builder

@@ -1,5 +1,7 @@
 #pragma once
 
+#include "PendingNodeV2.h"
+
 #include <ff/builder/SpillCodec.h>
 #include <ff/storage/SceneFormat.h>
 #include <ff/storage/Status.h>
@@ -94,6 +96,8 @@ inline constexpr std::size_t kSpillBlockBytes = 1u << 20;
 using RunFile = SpillFile<storage::PackedTriangle>;
 /** Node records on their way to a level region. */
 using RecordFile = SpillFile<storage::NodeRecord>;
+/** And format 2's (RunFile.cpp instantiates it too). */
+using RecordFileV2 = SpillFile<PendingNodeV2>;
 
 /** ENOSPC/EDQUOT become DiskFull, anything else IoError; the message names the path. */
 Status ioStatus(int error, const std::string& what, const std::filesystem::path& path);

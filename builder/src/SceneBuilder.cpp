@@ -6,7 +6,9 @@
 #include "PrototypeBuilder.h"
 #include "RunFile.h"
 
+#include <ff/builder/GridChoice.h>
 #include <ff/storage/ProcessMemory.h>
+#include <ff/storage/PrototypeRecordV2.h>
 #include <ff/storage/SceneWriter.h>
 
 #include <glm/gtc/matrix_transform.hpp>
@@ -51,6 +53,7 @@ struct PrototypeState {
     glm::vec3 boundsMin{std::numeric_limits<float>::infinity()};
     glm::vec3 boundsMax{-std::numeric_limits<float>::infinity()};
     std::optional<VoxelGrid> grid;
+    EdgeSampler edges; ///< v2: what its position grid's step is chosen from
 };
 
 } // namespace
@@ -110,6 +113,8 @@ Result<std::unique_ptr<SceneBuilder>> SceneBuilder::create(
         return Status(ErrorCode::InvalidArgument, "bake resolution must be between 2 and 64");
     if (!(options.hierarchy.cubeCost > 0.0f) || !(options.hierarchy.largeTriangleTolerance > 0.0f))
         return Status(ErrorCode::InvalidArgument, "cube cost and large-triangle tolerance must be positive");
+    if (options.formatVersion != storage::kFormatVersion && options.formatVersion != storage::kFormatVersion2)
+        return Status(ErrorCode::InvalidArgument, "format version must be 1 or 2");
 
     auto impl = std::make_unique<Impl>();
     impl->outputPath = outputPath;
@@ -134,7 +139,9 @@ Result<std::unique_ptr<SceneBuilder>> SceneBuilder::create(
     // it once the page size is chosen (nothing is written before that).
     storage::SceneWriterOptions writerOptions;
     writerOptions.pageSize = options.pageSize.value_or(storage::kDefaultPageSize);
+    writerOptions.formatVersion = options.formatVersion;
     FF_ASSIGN_OR_RETURN(impl->writer, storage::SceneWriter::create(outputPath, writerOptions));
+    impl->report.formatVersion = options.formatVersion;
     impl->spillBufferLimit = static_cast<std::size_t>(options.memoryBudgetBytes / 8);
     impl->report.memoryBudgetBytes = options.memoryBudgetBytes;
     impl->report.pageSize = writerOptions.pageSize;
@@ -149,7 +156,7 @@ Result<PrototypeId> SceneBuilder::addPrototype(std::string_view name) {
     const auto id = static_cast<PrototypeId>(mImpl->prototypes.size());
     auto state = std::make_unique<PrototypeState>(PrototypeState{
             std::string(name), RunFile(mImpl->tempDirectory / ("proto" + std::to_string(id) + ".run"), mImpl->options.spillCodec), {}, {},
-            std::nullopt});
+            std::nullopt, {}});
     state->boundsMin = glm::vec3(std::numeric_limits<float>::infinity());
     state->boundsMax = glm::vec3(-std::numeric_limits<float>::infinity());
     mImpl->prototypes.push_back(std::move(state));
@@ -175,6 +182,8 @@ Status SceneBuilder::Impl::spill(PrototypeState& proto, std::span<const storage:
                     proto.boundsMax = glm::max(proto.boundsMax, glm::vec3(v.position[0], v.position[1], v.position[2]));
                 }
             FF_RETURN_IF_ERROR(proto.run.append(run));
+            if (options.formatVersion == storage::kFormatVersion2)
+                proto.edges.add(run);
             spillBuffered += run.size_bytes(); // an over-estimate once a run flushes itself
         }
         return Status::ok();
@@ -257,14 +266,17 @@ Result<BuildReport> SceneBuilder::finish() {
     // extent of this size, budget/256 up to 1 MiB, before writing them (at most maxDepth + 1
     // levels: 21 MiB at 1 GiB).
     const std::uint64_t levelExtentBytes = std::min<std::uint64_t>(fixedReserve / 64, 1u << 20);
+    const bool v2 = s.options.formatVersion == storage::kFormatVersion2;
+    NodePageTable nodePageTable(s.writer->pageSize()); // v2: every Nodes page, in node-index order
     PrototypeBuilder protoBuilder(
             *s.writer, s.options.hierarchy, chunkTriangles, levelExtentBytes, s.options.threads, s.tempDirectory,
-            s.options.spillCodec, s.options.progress);
+            s.options.spillCodec, s.options.progress, v2 ? &nodePageTable : nullptr);
     // Prototypes left without triangles get no record (a record needs a root node): the table
     // holds the others in declaration order, and storedIndex maps declared ids to it.
     constexpr std::uint32_t kNotStored = std::numeric_limits<std::uint32_t>::max();
     std::vector<std::uint32_t> storedIndex(s.prototypes.size(), kNotStored);
     std::vector<storage::PrototypeRecord> protoRecords;
+    std::vector<storage::PrototypeV2> protoRecordsV2; // v2: what the Prototypes section holds
     std::vector<PrototypeSummary> summaries;
     nlohmann::json names = nlohmann::json::array(); // per stored prototype
     for (std::size_t p = 0; p < s.prototypes.size(); ++p) {
@@ -277,13 +289,29 @@ Result<BuildReport> SceneBuilder::finish() {
         // Building reads the run file back from disk: all of it counts as spilled.
         FF_RETURN_IF_ERROR(proto.run.flush());
         report.spillBytes += proto.run.bytesWritten();
+        std::optional<PrototypeEncodingV2> encoding;
+        if (v2) {
+            FF_ASSIGN_OR_RETURN(
+                    const storage::PositionGrid positionGrid,
+                    chooseGrid({proto.boundsMin.x, proto.boundsMin.y, proto.boundsMin.z},
+                               {proto.boundsMax.x, proto.boundsMax.y, proto.boundsMax.z},
+                               proto.edges));
+            encoding = PrototypeEncodingV2{positionGrid, static_cast<std::uint32_t>(protoRecords.size())};
+            report.maxGridBits = std::max<std::uint32_t>(report.maxGridBits, static_cast<std::uint32_t>(positionGrid.bits));
+        }
         FF_ASSIGN_OR_RETURN(
                 PrototypeBuildResult built,
                 protoBuilder.build(
                         static_cast<std::uint32_t>(p), proto.run, proto.boundsMin, proto.boundsMax,
-                        proto.grid ? &*proto.grid : nullptr, report.spillBytes));
+                        proto.grid ? &*proto.grid : nullptr, encoding ? &*encoding : nullptr, report.spillBytes));
         storedIndex[p] = static_cast<std::uint32_t>(protoRecords.size());
         protoRecords.push_back(built.record);
+        if (v2)
+            protoRecordsV2.push_back(built.recordV2);
+        report.clusters += built.clusters.clusters;
+        report.wideClusters += built.clusters.wideClusters;
+        report.clusterVertices += built.clusters.clusterVertices;
+        report.clusterBytes += built.clusters.encodedBytes;
         summaries.push_back(std::move(built.summary));
         names.push_back(proto.name);
         report.storedTriangles += built.record.triangleCount;
@@ -324,9 +352,14 @@ Result<BuildReport> SceneBuilder::finish() {
     s.progress("instances", 0, 1);
     FF_ASSIGN_OR_RETURN(
             InstanceLevelResult level,
-            buildInstanceLevel(*s.writer, instanceRecords, protoRecords, summaries, s.options.hierarchy));
+            buildInstanceLevel(
+                    *s.writer, instanceRecords, protoRecords, summaries, s.options.hierarchy, v2 ? &nodePageTable : nullptr));
     report.nodes += level.nodes;
     report.nodePages += level.nodePages;
+    if (v2) { // the last node page; the report counts the pages written
+        FF_RETURN_IF_ERROR(nodePageTable.writeOpen(*s.writer));
+        report.nodePages = nodePageTable.pages().size();
+    }
     report.instanceLevelDepth = level.depth;
     start = phaseEnd("instances", start);
 
@@ -334,15 +367,17 @@ Result<BuildReport> SceneBuilder::finish() {
     s.progress("write", 0, 1);
     std::vector<storage::SectionEntry> sections;
     const std::uint64_t tableStart = s.writer->nextPageIndex();
-    FF_ASSIGN_OR_RETURN(
-            storage::SectionEntry protoSection,
-            s.writer->appendSection(storage::SectionType::Prototypes, std::as_bytes(std::span(protoRecords)), protoRecords.size()));
-    sections.push_back(protoSection);
-    FF_ASSIGN_OR_RETURN(
-            storage::SectionEntry instanceSection,
-            s.writer->appendSection(storage::SectionType::Instances, std::as_bytes(std::span(instanceRecords)), instanceRecords.size()));
-    sections.push_back(instanceSection);
-
+    std::vector<std::byte> protoBytes;
+    if (v2) {
+        protoBytes.resize(protoRecordsV2.size() * storage::kPrototypeRecordV2Size);
+        for (std::size_t i = 0; i < protoRecordsV2.size(); ++i)
+            FF_RETURN_IF_ERROR(storage::encodePrototypeV2(
+                    protoRecordsV2[i],
+                    std::span(protoBytes).subspan(i * storage::kPrototypeRecordV2Size, storage::kPrototypeRecordV2Size)));
+    } else {
+        const auto bytes = std::as_bytes(std::span(protoRecords));
+        protoBytes.assign(bytes.begin(), bytes.end());
+    }
     nlohmann::json metadata = nlohmann::json::parse(s.options.metadataJson, nullptr, false);
     if (!metadata.is_object())
         metadata = nlohmann::json::object();
@@ -355,10 +390,14 @@ Result<BuildReport> SceneBuilder::finish() {
         build.erase(machineDependent);
     metadata["build"] = std::move(build);
     const std::string metadataText = metadata.dump();
-    FF_ASSIGN_OR_RETURN(
-            storage::SectionEntry metadataSection,
-            s.writer->appendSection(storage::SectionType::Metadata, std::as_bytes(std::span(metadataText)), 1));
-    sections.push_back(metadataSection);
+    std::vector<storage::SceneWriter::SectionStream> streams = {
+            {storage::SectionType::Prototypes, protoBytes, protoRecords.size()},
+            {storage::SectionType::Instances, std::as_bytes(std::span(instanceRecords)), instanceRecords.size()},
+            {storage::SectionType::Metadata, std::as_bytes(std::span(metadataText)), 1},
+    };
+    if (v2)
+        streams.push_back({storage::SectionType::NodePages, std::as_bytes(std::span(nodePageTable.pages())), nodePageTable.pages().size()});
+    FF_ASSIGN_OR_RETURN(sections, s.writer->appendSections(streams));
     storage::SectionEntry hierarchy{};
     hierarchy.type = static_cast<std::uint32_t>(storage::SectionType::Hierarchy);
     hierarchy.firstPage = 1;
@@ -368,6 +407,10 @@ Result<BuildReport> SceneBuilder::finish() {
 
     storage::FileHeader header{};
     header.root = level.root;
+    if (v2) {
+        header.root = {level.rootNode, 0};
+        header.flags = storage::kFileV2HasRoot;
+    }
     header.boundsMin = {level.boundsMin.x, level.boundsMin.y, level.boundsMin.z};
     header.boundsMax = {level.boundsMax.x, level.boundsMax.y, level.boundsMax.z};
     header.nodeCount = report.nodes;
@@ -390,6 +433,7 @@ Result<BuildReport> SceneBuilder::finish() {
 
 Status SceneBuilder::Impl::choosePageSize() {
     PageSizeInputs inputs;
+    inputs.formatVersion = options.formatVersion;
     inputs.prototypes.resize(prototypes.size());
     for (std::size_t p = 0; p < prototypes.size(); ++p)
         inputs.prototypes[p].triangles = prototypes[p]->run.count();
@@ -401,6 +445,7 @@ Status SceneBuilder::Impl::choosePageSize() {
     writer.reset();
     storage::SceneWriterOptions writerOptions;
     writerOptions.pageSize = chosen;
+    writerOptions.formatVersion = options.formatVersion;
     FF_ASSIGN_OR_RETURN(writer, storage::SceneWriter::create(outputPath, writerOptions));
     report.pageSize = chosen;
     return Status::ok();
@@ -417,6 +462,7 @@ std::string buildReportJson(const BuildReport& r) {
             {"input_triangles", r.inputTriangles},
             {"dropped_non_finite_triangles", r.droppedNonFinite},
             {"dropped_degenerate_triangles", r.droppedDegenerate},
+            {"format_version", r.formatVersion},
             {"stored_triangles", r.storedTriangles},
             {"instanced_triangles", r.instancedTriangles},
             {"prototypes", r.prototypes},
@@ -440,6 +486,7 @@ std::string buildReportJson(const BuildReport& r) {
               {"spill", r.spillBytes}}},
             {"pages", {{"nodes", r.nodePages}, {"geometry", r.geometryPages}, {"tables", r.tablePages}}},
             {"spill_codec", r.spillCodec},
+            {"clusters", {{"count", r.clusters}, {"wide", r.wideClusters}, {"vertices", r.clusterVertices}, {"bytes", r.clusterBytes}, {"max_grid_bits", r.maxGridBits}}},
             {"seconds", phases},
             {"total_seconds", total},
             {"memory_budget_bytes", r.memoryBudgetBytes},

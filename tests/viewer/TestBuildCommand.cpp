@@ -131,6 +131,32 @@ TEST(BuildCommandTest, TerrainEightTimesTheBudgetBuildsWithinIt) {
 }
 
 // ------------------------------------------------------------------------------------------
+// Format 2: built, verified by check down to every cluster; the runtime says it cannot draw it.
+
+TEST(BuildCommandTest, FormatTwoIsCheckedAndRefusedByTheRuntimeWithAReason) {
+    const fs::path dir = freshTestDir();
+    const fs::path scene = dir / "skull2.ffs";
+    const ProcessResult built = build(dir, {(kData / "scanned/skull/skull.glb").string(), "--format", "2"}, scene);
+    ASSERT_TRUE(exitedWith(built, 0)) << built.describe();
+    const json report = readJsonFile(dir / "skull2.json");
+    EXPECT_EQ(report.at("format_version").get<int>(), 2);
+    EXPECT_GT(report.at("clusters").at("count").get<std::uint64_t>(), 0u);
+
+    const ProcessResult checked = runFarfield({"check", "--json", scene.string()}, dir);
+    ASSERT_TRUE(exitedWith(checked, 0)) << checked.describe();
+    const json result = json::parse(checked.out);
+    EXPECT_EQ(result.at("format_version").get<int>(), 2);
+    EXPECT_EQ(result.at("hierarchy").at("triangles").get<std::uint64_t>(), report.at("stored_triangles").get<std::uint64_t>());
+    EXPECT_EQ(result.at("hierarchy").at("nodes").get<std::uint64_t>(), report.at("nodes").get<std::uint64_t>());
+
+    const ProcessResult rendered = runFarfield({"render", scene.string(), "-o", (dir / "skull.png").string()}, dir);
+    EXPECT_FALSE(exitedWith(rendered, 0)) << rendered.describe();
+    EXPECT_FALSE(rendered.signaled) << rendered.describe();
+    EXPECT_NE(rendered.err.find("format version 2 is not drawn by this build yet"), std::string::npos) << rendered.err;
+    EXPECT_FALSE(fs::exists(dir / "skull.png"));
+}
+
+// ------------------------------------------------------------------------------------------
 // Determinism: same input, same bytes.
 
 TEST(BuildCommandTest, SameInputGivesByteIdenticalFiles) {

@@ -41,6 +41,8 @@ struct BuildArgs {
     std::string report;
     std::string tempDirectory;
     std::string spill = "compact";
+    unsigned format = 1;
+    std::uint64_t clusterLeafTriangles = 4096;
     bool quiet = false;
 };
 
@@ -78,6 +80,8 @@ int runBuild(const BuildArgs& args) {
     if (!spill)
         return reportError("build", Status(ErrorCode::InvalidArgument, "--spill must be compact or raw"));
     options.spillCodec = *spill;
+    options.formatVersion = args.format;
+    options.hierarchy.clusterLeafTriangles = args.clusterLeafTriangles;
     options.hierarchy.bakeResolution = args.bakeResolution;
     options.hierarchy.bakeInnerDirect = args.bakeInner == "direct";
     options.hierarchy.cubeCost = args.cubeCost;
@@ -205,6 +209,14 @@ CommandRunner addBuildCommand(CLI::App& app) {
     cmd->add_option("--spill", args->spill,
                     "How spill files store triangles: compact (lossless vertex codec: 2.5x fewer bytes on a terrain, a little slower) or raw")
             ->check(CLI::IsMember({"compact", "raw"}))
+            ->capture_default_str();
+    cmd->add_option("--format", args->format,
+                    "Scene file format: 1 (drawn by render/replay/view) or 2 (compact clusters and 48-byte records, "
+                    "storage/FORMAT.md; verified by check, not drawn yet)")
+            ->check(CLI::IsMember({1u, 2u}))
+            ->capture_default_str();
+    cmd->add_option("--cluster-leaf-triangles", args->clusterLeafTriangles,
+                    "--format 2: subtrees of at most this many triangles become one leaf of whole clusters (0: keep the leaves)")
             ->capture_default_str();
     cmd->add_flag("-q,--quiet", args->quiet, "No progress or summary on stderr");
     return [args]() { return runBuild(*args); };

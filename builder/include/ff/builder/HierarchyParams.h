@@ -1,5 +1,6 @@
 #pragma once
 
+#include <cstdint>
 #include <optional>
 #include <string_view>
 
@@ -59,6 +60,10 @@ struct HierarchyParams {
      *  the builder composites. The bounding-volume decompositions composite their children's
      *  boxes seen through their cubes (their children are not octants: no quadrants). */
     bool bakeInnerDirect = false;
+    /** Format 2 only: a subtree of at most this many triangles is written as one leaf of whole
+     *  clusters, so a node's 48-byte record is spread over many triangles (the v2 estimate of
+     *  docs/results "Compact geometry" was measured at 4096). 0 keeps the hierarchy's leaves. */
+    std::uint64_t clusterLeafTriangles = 4096;
 };
 
 } // namespace ff::builder

@@ -59,6 +59,10 @@ struct BuildOptions {
      *  default, wrote 2.5x fewer bytes on the 200 M terrain for 6 % more time; raw costs no
      *  encoding time. */
     SpillCodec spillCodec = SpillCodec::Compact;
+    /** storage::kFormatVersion (the default; what the runtime draws) or kFormatVersion2
+     *  (`farfield build --format 2`: compact clusters and 48-byte records; read and checked by
+     *  storage, not drawn yet). */
+    std::uint32_t formatVersion = storage::kFormatVersion;
     /** Applied to every instance before anything else: moves and scales the whole input in the
      *  world (`farfield build --offset/--scale`). */
     glm::dmat4 placement{1.0};
@@ -77,7 +81,13 @@ struct BuildReport {
     std::uint64_t inputTriangles = 0;      ///< received by the sink
     std::uint64_t droppedNonFinite = 0;    ///< NaN/Inf positions
     std::uint64_t droppedDegenerate = 0;   ///< zero area
-    std::uint64_t storedTriangles = 0;     ///< in the file (prototypes once)
+    std::uint32_t formatVersion = 0;
+    std::uint64_t storedTriangles = 0;     ///< in the file (prototypes once; v2: kept by the codec)
+    std::uint64_t clusters = 0;            ///< v2: clusters written
+    std::uint64_t wideClusters = 0;        ///< v2: of them with 32-bit coordinates
+    std::uint64_t clusterVertices = 0;     ///< v2: vertices over all clusters
+    std::uint64_t clusterBytes = 0;        ///< v2: encoded clusters (the geometry pages less their slack)
+    std::uint32_t maxGridBits = 0;         ///< v2: the largest prototype grid
     std::uint64_t instancedTriangles = 0;  ///< as drawn
     std::uint32_t prototypes = 0;
     std::uint32_t emptyPrototypes = 0;     ///< no triangle survived; their instances are dropped

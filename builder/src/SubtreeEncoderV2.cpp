@@ -1,0 +1,305 @@
+#include "SubtreeEncoderV2.h"
+
+#include "ClusterPagePacker.h"
+#include "LeafCollapse.h"
+
+#include <ff/builder/ColorCube.h>
+#include <ff/storage/Assert.h>
+#include <ff/storage/NodePageV2.h>
+
+#include <algorithm>
+#include <cmath>
+#include <string>
+#include <unordered_map>
+
+namespace ff::builder {
+
+namespace {
+
+constexpr std::uint32_t kNone = 0xFFFFFFFFu;
+
+bool isInstance(const BuildNode& node) {
+    return node.kind == static_cast<std::uint8_t>(storage::NodeKind::Instance);
+}
+
+bool placedElsewhere(const BuildNode& node) {
+    return node.placedChildren.has_value() || node.placedTriangles.has_value();
+}
+
+std::array<float, 3> toArray(const glm::vec3& v) {
+    return {v.x, v.y, v.z};
+}
+
+/** The hierarchy as it will be written: reachable nodes breadth first (sibling blocks in
+ *  order), with their parents. A placed node's children are elsewhere: not entered. */
+struct Tree {
+    std::vector<std::uint32_t> order;
+    std::vector<std::uint32_t> parent; ///< per node; kNone for the root and unreached nodes
+};
+
+Tree breadthFirst(const std::vector<BuildNode>& nodes) {
+    Tree tree;
+    tree.parent.assign(nodes.size(), kNone);
+    tree.order.push_back(0);
+    for (std::size_t i = 0; i < tree.order.size(); ++i) {
+        const std::uint32_t n = tree.order[i];
+        const BuildNode& node = nodes[n];
+        if (node.placedChildren)
+            continue;
+        for (std::uint32_t c = 0; c < node.childCount; ++c) {
+            tree.order.push_back(node.firstChild + c);
+            tree.parent[node.firstChild + c] = n;
+        }
+    }
+    return tree;
+}
+
+std::vector<storage::NodeBox> decodedBoxes(
+        const std::vector<BuildNode>& nodes, const Tree& tree, const storage::NodeBox& rootParent) {
+    std::vector<storage::NodeBox> decoded(nodes.size());
+    for (const std::uint32_t n : tree.order) {
+        const storage::NodeBox& parent =
+                tree.parent[n] == kNone ? rootParent : decoded[tree.parent[n]];
+        const storage::NodeBox box =
+                boundsInside(toArray(nodes[n].boundsMin), toArray(nodes[n].boundsMax), parent);
+        // The box lies inside its parent by construction: quantizing outward cannot fail.
+        decoded[n] = storage::quantizeBoundsOutward(box, parent).value();
+    }
+    return decoded;
+}
+
+/** Where a node goes: a page of this subtree (from 0) and a slot in it. */
+struct Placement {
+    std::uint32_t page = 0;
+    std::uint32_t slot = 0;
+};
+
+} // namespace
+
+storage::NodeBox boundsInside(
+        const std::array<float, 3>& boundsMin,
+        const std::array<float, 3>& boundsMax,
+        const storage::NodeBox& parent) {
+    storage::NodeBox box;
+    for (std::size_t a = 0; a < 3; ++a) {
+        const float lo = boundsMin[a];
+        const float hi = boundsMax[a];
+        if (!(lo <= hi) || !std::isfinite(lo) || !std::isfinite(hi)) {
+            box.min[a] = box.max[a] = parent.min[a];
+            continue;
+        }
+        // A child's bounds lie inside its parent's by construction (a parent's are the union);
+        // the clamp only absorbs float noise of decompositions that recompute them.
+        box.min[a] = std::clamp(lo, parent.min[a], parent.max[a]);
+        box.max[a] = std::clamp(hi, box.min[a], parent.max[a]);
+    }
+    return box;
+}
+
+std::vector<storage::NodeBox>
+decodedBoxesV2(const std::vector<BuildNode>& nodes, const storage::NodeBox& rootParent) {
+    return decodedBoxes(nodes, breadthFirst(nodes), rootParent);
+}
+
+Status NodePageTable::writeOpen(storage::SceneWriter& writer) {
+    if (mOpen.empty())
+        return Status::ok();
+    FF_ASSIGN_OR_RETURN(
+            const std::uint64_t filePage,
+            writer.appendPage(storage::PageType::Nodes, mOpen.bytes()));
+    if (filePage > 0xFFFFFFFFull)
+        return Status(
+                ErrorCode::Unsupported,
+                "scene needs more than 2^32 pages; use a larger --page-size");
+    mPages.push_back(static_cast<std::uint32_t>(filePage));
+    mOpen.clear();
+    return Status::ok();
+}
+
+Result<SubtreeV2Result> writeSubtreeV2(
+        storage::SceneWriter& writer,
+        NodePageTable& table,
+        std::vector<BuildNode> nodes,
+        std::span<storage::PackedTriangle> triangles,
+        const SubtreeV2Input& input) {
+    FF_ASSERT(!nodes.empty());
+    std::unordered_map<std::uint32_t, const PlacedNodeV2*> placed;
+    for (const PlacedNodeV2& p : input.placed)
+        placed[p.node] = &p;
+    for (std::size_t n = 0; n < nodes.size(); ++n)
+        if (placedElsewhere(nodes[n]) && placed.count(static_cast<std::uint32_t>(n)) == 0)
+            return Status(ErrorCode::Internal, "a node placed elsewhere without its placement");
+    const bool hasGeometry = input.grid != nullptr;
+    if (hasGeometry)
+        collapseSmallSubtrees(nodes, triangles, input.leafTriangles);
+    const Tree tree = breadthFirst(nodes);
+    SubtreeV2Result result;
+
+    // ---- geometry: each node's triangles as clusters, breadth first -------------------------
+    std::vector<std::uint32_t> firstRep(nodes.size(), 0);
+    std::vector<std::uint32_t> repCount(nodes.size(), 0);
+    std::vector<storage::RepresentationRecord> reps;
+    std::vector<std::uint64_t> ownKept(nodes.size(), 0);
+    {
+        ClusterEncoder encoder;
+        ClusterPagePacker packer(writer, input.prototype);
+        std::vector<std::byte> clusters;
+        std::vector<bool> local; // per rep: a page of this packer, to relocate
+        for (const std::uint32_t n : tree.order) {
+            const BuildNode& node = nodes[n];
+            firstRep[n] = static_cast<std::uint32_t>(reps.size());
+            if (const auto p = placed.find(n); p != placed.end()) {
+                reps.insert(
+                        reps.end(),
+                        p->second->representations.begin(),
+                        p->second->representations.end());
+                local.resize(reps.size(), false);
+                ownKept[n] = p->second->storedTriangles;
+            } else if (node.triangleCount > 0 && !isInstance(node)) {
+                if (!hasGeometry)
+                    return Status(
+                            ErrorCode::Internal, "triangles in a hierarchy written without a grid");
+                clusters.clear();
+                const auto run = std::span<const storage::PackedTriangle>(triangles).subspan(
+                        node.firstTriangle, node.triangleCount);
+                FF_ASSIGN_OR_RETURN(
+                        const ClusterBuildStats stats, encoder.encode(run, *input.grid, clusters));
+                result.clusters += stats;
+                ownKept[n] = stats.trianglesKept;
+                FF_RETURN_IF_ERROR(
+                        packer.place(clusters, static_cast<std::uint32_t>(stats.clusters), reps));
+                local.resize(reps.size(), true);
+            }
+            repCount[n] = static_cast<std::uint32_t>(reps.size()) - firstRep[n];
+            if (repCount[n] > 255)
+                return Status(
+                        ErrorCode::Unsupported,
+                        "a node needs more than 255 representations; use a larger --page-size");
+        }
+        FF_RETURN_IF_ERROR(packer.finish());
+        for (std::size_t r = 0; r < reps.size(); ++r)
+            if (local[r])
+                reps[r] = packer.relocated(reps[r]);
+        result.geometryPages = packer.pages();
+    }
+
+    // ---- what each node draws at and below it, as stored -------------------------------------
+    std::vector<double> drawn(nodes.size(), 0.0);
+    for (std::size_t i = tree.order.size(); i-- > 0;) {
+        const std::uint32_t n = tree.order[i];
+        const BuildNode& node = nodes[n];
+        if (const auto p = placed.find(n); p != placed.end())
+            drawn[n] += p->second->drawnTriangles;
+        else if (isInstance(node))
+            drawn[n] += static_cast<double>(
+                    node.instanceIndex < input.instanceTriangles.size()
+                            ? input.instanceTriangles[node.instanceIndex]
+                            : 0);
+        else
+            drawn[n] += static_cast<double>(ownKept[n]);
+        if (tree.parent[n] != kNone)
+            drawn[tree.parent[n]] += drawn[n];
+    }
+
+    // ---- node pages: whole sibling blocks in breadth-first order -----------------------------
+    // pages[0] is the table's open page, which may hold another hierarchy's records already.
+    const std::uint32_t slotsPerPage = storage::nodesPerPageV2(writer.pageSize());
+    const std::uint64_t payloadBytes = storage::pagePayloadBytes(writer.pageSize());
+    std::vector<Placement> placement(nodes.size());
+    std::vector<std::vector<std::uint32_t>> pages(1); // nodes per page, slot order
+    {
+        std::uint64_t pageNodes = table.open().nextSlot();
+        std::uint64_t pageReps = table.open().representationCount();
+        auto placeBlock = [&](std::uint32_t first, std::uint32_t count) -> Status {
+            std::uint64_t blockReps = 0;
+            for (std::uint32_t k = 0; k < count; ++k)
+                blockReps += repCount[first + k];
+            const auto fits = [&](std::uint64_t nodesBefore, std::uint64_t repsBefore) {
+                return storage::kNodeRecordV2Size * (nodesBefore + count) +
+                               storage::kRepresentationRecordSize * (repsBefore + blockReps) <=
+                       payloadBytes;
+            };
+            if (!fits(pageNodes, pageReps)) {
+                if (!fits(0, 0))
+                    return Status(
+                            ErrorCode::Unsupported,
+                            "a sibling block of " + std::to_string(count) + " nodes and " +
+                                    std::to_string(blockReps) +
+                                    " representations does not fit one page; use a larger "
+                                    "--page-size");
+                pages.emplace_back();
+                pageNodes = 0;
+                pageReps = 0;
+            }
+            for (std::uint32_t k = 0; k < count; ++k) {
+                placement[first + k] = {
+                        static_cast<std::uint32_t>(pages.size() - 1),
+                        static_cast<std::uint32_t>(pageNodes + k)};
+                pages.back().push_back(first + k);
+            }
+            pageNodes += count;
+            pageReps += blockReps;
+            return Status::ok();
+        };
+        FF_RETURN_IF_ERROR(placeBlock(0, 1));
+        for (const std::uint32_t n : tree.order) {
+            const BuildNode& node = nodes[n];
+            if (node.childCount > 0 && !node.placedChildren)
+                FF_RETURN_IF_ERROR(placeBlock(node.firstChild, node.childCount));
+        }
+    }
+    const std::uint64_t ordinalBase = table.openOrdinal();
+    const auto indexOf = [&](std::uint32_t n) -> Result<std::uint32_t> {
+        const std::uint64_t index =
+                (ordinalBase + placement[n].page) * slotsPerPage + placement[n].slot;
+        if (index >= kNone)
+            return Status(ErrorCode::Unsupported, "scene needs more than 2^32 node slots");
+        return static_cast<std::uint32_t>(index);
+    };
+
+    const std::vector<storage::NodeBox> decoded = decodedBoxes(nodes, tree, input.rootParent);
+    for (std::size_t p = 0; p < pages.size(); ++p) {
+        if (p > 0)
+            FF_RETURN_IF_ERROR(table.writeOpen(writer));
+        storage::NodePageV2Writer& page = table.open();
+        for (const std::uint32_t n : pages[p]) {
+            const BuildNode& node = nodes[n];
+            const storage::NodeBox& parentBox =
+                    tree.parent[n] == kNone ? input.rootParent : decoded[tree.parent[n]];
+            storage::NodeV2 record;
+            record.bounds =
+                    boundsInside(toArray(node.boundsMin), toArray(node.boundsMax), parentBox);
+            record.cube = quantizeCube(node.cube);
+            record.subtreeTriangles = static_cast<float>(drawn[n]);
+            record.kind =
+                    isInstance(node) ? storage::NodeKindV2::Instance : storage::NodeKindV2::Cell;
+            record.flags = storage::kNodeV2HasCube;
+            if (node.childCount > 0) {
+                if (const auto q = placed.find(n); q != placed.end() && node.placedChildren) {
+                    record.firstChild = q->second->firstChild;
+                } else {
+                    FF_ASSIGN_OR_RETURN(record.firstChild, indexOf(node.firstChild));
+                }
+                record.childCount = static_cast<std::uint8_t>(node.childCount);
+                if (node.octreeChildren)
+                    record.flags = static_cast<std::uint8_t>(
+                            record.flags | storage::kNodeV2OctreeChildren);
+            }
+            if (isInstance(node))
+                record.firstRepresentation = node.instanceIndex;
+            const auto own =
+                    std::span(reps).subspan(firstRep[n], isInstance(node) ? 0 : repCount[n]);
+            FF_ASSIGN_OR_RETURN(const std::uint32_t slot, page.append(record, parentBox, own));
+            FF_ASSERT(slot == placement[n].slot);
+            ++result.nodes;
+            result.leafNodes += node.childCount > 0 ? 0 : 1;
+            result.maxLevel = std::max<std::uint32_t>(result.maxLevel, node.level);
+            result.storedTriangles += ownKept[n];
+        }
+    }
+    result.nodePages = pages.size();
+    FF_ASSIGN_OR_RETURN(result.rootNode, indexOf(0));
+    return result;
+}
+
+} // namespace ff::builder

@@ -1,0 +1,118 @@
+#pragma once
+
+// A hierarchy written as format v2 (storage/FORMAT.md §5.3-5.4, §6.3-6.4): each node's
+// triangles encoded into clusters on its prototype's grid and packed into cluster pages, then
+// the nodes in 48-byte records with their representations, addressed by node index.
+
+#include "OctreeBuilder.h"
+
+#include <ff/builder/ClusterBuild.h>
+#include <ff/storage/ClusterCodec.h>
+#include <ff/storage/NodePageV2.h>
+#include <ff/storage/NodeRecordV2.h>
+#include <ff/storage/SceneFormat.h>
+#include <ff/storage/SceneWriter.h>
+#include <ff/storage/Status.h>
+
+#include <array>
+#include <cstdint>
+#include <span>
+#include <vector>
+
+namespace ff::builder {
+
+/**
+ * The file's v2 Nodes pages in node-index order (its NodePages section): node index n is slot
+ * n mod nodesPerPageV2 of page pages()[n / nodesPerPageV2]. The last page stays open across
+ * hierarchies, so small ones (an instance level, a small prototype) share a page instead of
+ * each padding one out; its node indices are known before it is written (they count pages, not
+ * file positions).
+ */
+class NodePageTable {
+public:
+    explicit NodePageTable(std::uint32_t pageSize)
+        : mOpen(pageSize) {}
+
+    /** The page being filled: the next ordinal. */
+    [[nodiscard]] storage::NodePageV2Writer& open() noexcept { return mOpen; }
+    [[nodiscard]] std::uint64_t openOrdinal() const noexcept { return mPages.size(); }
+    /** Appends the open page (if it holds a node) and starts the next. */
+    [[nodiscard]] Status writeOpen(storage::SceneWriter& writer);
+    /** Pages written, in ordinal order. */
+    [[nodiscard]] const std::vector<std::uint32_t>& pages() const noexcept { return mPages; }
+
+private:
+    storage::NodePageV2Writer mOpen;
+    std::vector<std::uint32_t> mPages;
+};
+
+/** A node whose children and own payload were written elsewhere (a chunk's root, whose chunk
+ *  went to level regions): what its record needs of them. */
+struct PlacedNodeV2 {
+    std::uint32_t node = 0;       ///< index in the hierarchy's `nodes`
+    std::uint32_t firstChild = 0; ///< node index of its children (the node's childCount of them)
+    std::vector<storage::RepresentationRecord> representations; ///< its own payload, final pages
+    std::uint64_t storedTriangles = 0;                          ///< its own, as the codec kept them
+    double drawnTriangles = 0.0;                                ///< its own and all below it
+};
+
+/** What a v2 hierarchy is written against. */
+struct SubtreeV2Input {
+    std::uint32_t prototype = 0; ///< whose cluster pages its geometry goes to
+    /** The prototype's grid; null for a hierarchy without triangles (the instance level). */
+    const storage::PositionGrid* grid = nullptr;
+    /** What the root's bounds are stored relative to: the prototype record's bounds, or the
+     *  header's for the instance level. Must hold the root's bounds. */
+    storage::NodeBox rootParent;
+    /** Subtrees of at most this many triangles become one leaf: a leaf is whole clusters, and
+     *  a node costs a 48-byte record (0: keep the hierarchy's leaves). */
+    std::uint64_t leafTriangles = 0;
+    /** Per instance index, the triangles an Instance node draws (its prototype's). */
+    std::span<const std::uint64_t> instanceTriangles;
+    /** Every node with placedChildren or placedTriangles, resolved. */
+    std::span<const PlacedNodeV2> placed;
+};
+
+struct SubtreeV2Result {
+    std::uint32_t rootNode = 0; ///< node index
+    std::uint64_t nodes = 0;
+    std::uint64_t leafNodes = 0;
+    std::uint64_t storedTriangles = 0; ///< kept by the codec (those quantization collapsed are not)
+    std::uint64_t geometryPages = 0;
+    std::uint64_t nodePages = 0; ///< pages its records reached (a shared one counted)
+    std::uint32_t maxLevel = 0;
+    ClusterBuildStats clusters;
+};
+
+/**
+ * The bounds each reachable node of `nodes` decodes to in v2 (relative to its parent's decoded
+ * bounds, the root's to `rootParent`), as writeSubtreeV2 stores them: what the records a chunk's
+ * root has below it (written before it) are relative to. Nodes not reached are left empty.
+ */
+std::vector<storage::NodeBox>
+decodedBoxesV2(const std::vector<BuildNode>& nodes, const storage::NodeBox& rootParent);
+
+/** The node's bounds as a box inside `parent`, as a v2 record is given them (float noise of a
+ *  recomputed union clamped; an empty node at the parent's min corner). */
+storage::NodeBox boundsInside(
+        const std::array<float, 3>& boundsMin,
+        const std::array<float, 3>& boundsMax,
+        const storage::NodeBox& parent);
+
+/**
+ * Writes the hierarchy `nodes` (nodes[0] the root, children contiguous and after their parents;
+ * the nodes with placedChildren or placedTriangles resolved in input.placed) over `triangles`
+ * (each node's own run at [firstTriangle, +triangleCount); reordered when small subtrees become
+ * leaves, collapseSmallSubtrees): geometry pages first, in the nodes' breadth-first
+ * order, then node records of whole sibling blocks in the same order into `table`'s pages
+ * (from its open page on; the last is left open), each page's records with their
+ * representations. Deterministic.
+ */
+[[nodiscard]] Result<SubtreeV2Result> writeSubtreeV2(
+        storage::SceneWriter& writer,
+        NodePageTable& table,
+        std::vector<BuildNode> nodes,
+        std::span<storage::PackedTriangle> triangles,
+        const SubtreeV2Input& input);
+
+} // namespace ff::builder
