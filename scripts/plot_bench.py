@@ -386,7 +386,35 @@ def codec(data, out, name):
     fig.savefig(out / f"{name}.png", dpi=110)
 
 
-KINDS = {"table2": table2, "forest": forest, "build": build, "paging": paging, "views": views, "path": path, "replay": replay, "render": render, "codec": codec}
+def format_(data, out, name):
+    """Bytes a triangle and build time per scene, format 1 beside format 2."""
+    scenes = list(dict.fromkeys(r["scene"] for r in data))
+    formats = list(dict.fromkeys(r["format"] for r in data))
+    fig, (ax1, ax2) = plt.subplots(1, 2, figsize=(12, 4.6))
+    width = 0.8 / max(len(formats), 1)
+    for i, f in enumerate(formats):
+        sel = {r["scene"]: r for r in data if r["format"] == f}
+        xs = [k + (i - (len(formats) - 1) / 2) * width for k in range(len(scenes))]
+        ax1.bar(xs, [number(sel[s]["bytes_per_triangle"]) if s in sel else math.nan for s in scenes], width,
+                label=f"format {f}")
+        ax2.bar(xs, [number(sel[s]["build_seconds"]) if s in sel else math.nan for s in scenes], width,
+                label=f"format {f}")
+    ax1.axhline(8.0, color="k", linestyle=":", label="target 8 B / triangle")
+    ax1.set_yscale("log")
+    ax2.set_yscale("log")
+    for ax in (ax1, ax2):
+        ax.set_xticks(range(len(scenes)))
+        ax.set_xticklabels(scenes, rotation=20, ha="right", fontsize=8)
+        ax.legend(fontsize=7)
+    ax1.set_ylabel("file bytes / triangle (log)")
+    ax2.set_ylabel("build seconds (log)")
+    ax1.set_title("scene file size")
+    ax2.set_title("build time")
+    fig.tight_layout()
+    fig.savefig(out / f"{name}.png", dpi=110)
+
+
+KINDS = {"format": format_, "table2": table2, "forest": forest, "build": build, "paging": paging, "views": views, "path": path, "replay": replay, "render": render, "codec": codec}
 
 
 def main():

@@ -11,7 +11,7 @@ namespace {
 
 using Prepare = Result<BenchRun> (*)(const Scenario&);
 
-constexpr std::array<std::pair<const char*, Prepare>, 9> kKinds = {{
+constexpr std::array<std::pair<const char*, Prepare>, 10> kKinds = {{
         {"table2", prepareTable2},
         {"forest", prepareForest},
         {"build", prepareBuild},
@@ -21,6 +21,7 @@ constexpr std::array<std::pair<const char*, Prepare>, 9> kKinds = {{
         {"replay", prepareReplay},
         {"render", prepareRender},
         {"codec", prepareCodec},
+        {"format", prepareFormat},
 }};
 
 } // namespace

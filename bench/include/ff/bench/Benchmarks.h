@@ -50,6 +50,9 @@ using BenchRun = std::function<Status(const BenchOptions&)>;
  *  codec) per variant, bytes a triangle and decode rate, beside format v1 and Draco. */
 [[nodiscard]] Result<BenchRun> prepareCodec(const Scenario& scenario);
 
+/** Scene file formats 1 and 2 side by side: bytes a triangle, build time and memory, check rate. */
+[[nodiscard]] Result<BenchRun> prepareFormat(const Scenario& scenario);
+
 /** The prepare function of the scenario's kind. */
 [[nodiscard]] Result<BenchRun> prepareScenario(const Scenario& scenario);
 
