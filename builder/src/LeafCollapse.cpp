@@ -1,5 +1,7 @@
 #include "LeafCollapse.h"
 
+#include "Permutation.h"
+
 #include <ff/storage/Assert.h>
 
 #include <limits>
@@ -65,13 +67,7 @@ std::uint64_t collapseSmallSubtrees(
             stack.push_back(node.firstChild + c);
     }
     FF_ASSERT(cursor == triangles.size()); // every triangle belongs to exactly one node
-    for (std::size_t i = 0; i < triangles.size(); ++i) {
-        while (destination[i] != i) {
-            const std::uint32_t j = destination[i];
-            std::swap(triangles[i], triangles[j]);
-            std::swap(destination[i], destination[j]);
-        }
-    }
+    permuteInPlace(std::span(triangles), destination);
     // Outermost first: a collapsed node's descendants are unreachable, whatever they were.
     stack.assign(1, 0);
     while (!stack.empty()) {

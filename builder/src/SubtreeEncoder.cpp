@@ -1,5 +1,7 @@
 #include "SubtreeEncoder.h"
 
+#include "Permutation.h"
+
 #include <ff/storage/Assert.h>
 
 #include <algorithm>
@@ -66,13 +68,7 @@ bool orderGeometryBreadthFirst(
         cursor += node.triangleCount;
     }
     FF_ASSERT(cursor == triangles.size()); // every triangle belongs to exactly one node
-    for (std::size_t i = 0; i < triangles.size(); ++i) {
-        while (destination[i] != i) {
-            const std::uint32_t j = destination[i];
-            std::swap(triangles[i], triangles[j]);
-            std::swap(destination[i], destination[j]);
-        }
-    }
+    permuteInPlace(std::span(triangles), destination);
     return true;
 }
 
