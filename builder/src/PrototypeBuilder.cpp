@@ -218,6 +218,7 @@ Result<PrototypeBuildResult> PrototypeBuilder::buildInMemoryV2(
     input.grid = &encoding.grid;
     input.rootParent = {{boundsMin.x, boundsMin.y, boundsMin.z}, {boundsMax.x, boundsMax.y, boundsMax.z}};
     input.leafTriangles = mParams.clusterLeafTriangles;
+    input.threads = mThreads;
     PrototypeBuildResult result;
     result.summary = std::move(built.summary);
     FF_ASSIGN_OR_RETURN(

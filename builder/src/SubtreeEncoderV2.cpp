@@ -8,7 +8,9 @@
 #include <ff/storage/NodePageV2.h>
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
+#include <future>
 #include <string>
 #include <unordered_map>
 
@@ -66,6 +68,53 @@ std::vector<storage::NodeBox> decodedBoxes(
         decoded[n] = storage::quantizeBoundsOutward(box, parent).value();
     }
     return decoded;
+}
+
+/** One node's triangles as clusters. */
+struct EncodedPayload {
+    std::vector<std::byte> bytes;
+    ClusterBuildStats stats;
+};
+
+/** Encodes the nodes at positions `work` of `order` into `out` (by position) on `threads`
+ *  threads, each taking the next node as it finishes one. */
+Status encodePayloads(
+        const std::vector<BuildNode>& nodes,
+        const std::vector<std::uint32_t>& order,
+        const std::vector<std::size_t>& work,
+        std::span<const storage::PackedTriangle> triangles,
+        const storage::PositionGrid& grid,
+        unsigned threads,
+        std::vector<EncodedPayload>& out) {
+    std::atomic<std::size_t> next{0};
+    const auto worker = [&]() -> Status {
+        ClusterEncoder encoder;
+        for (std::size_t k = next++; k < work.size(); k = next++) {
+            const BuildNode& node = nodes[order[work[k]]];
+            EncodedPayload& payload = out[work[k]];
+            FF_ASSIGN_OR_RETURN(
+                    payload.stats,
+                    encoder.encode(
+                            triangles.subspan(node.firstTriangle, node.triangleCount),
+                            grid,
+                            payload.bytes));
+        }
+        return Status::ok();
+    };
+    const unsigned helpers = std::min<unsigned>(
+                                     std::max(threads, 1u),
+                                     static_cast<unsigned>(std::max<std::size_t>(work.size(), 1))) -
+                             1;
+    std::vector<std::future<Status>> running;
+    for (unsigned t = 0; t < helpers; ++t)
+        running.push_back(std::async(std::launch::async, worker));
+    Status status = worker();
+    for (auto& r : running) {
+        Status s = r.get();
+        if (status.isOk())
+            status = std::move(s);
+    }
+    return status;
 }
 
 /** Where a node goes: a page of this subtree (from 0) and a slot in it. */
@@ -141,11 +190,23 @@ Result<SubtreeV2Result> writeSubtreeV2(
     std::vector<storage::RepresentationRecord> reps;
     std::vector<std::uint64_t> ownKept(nodes.size(), 0);
     {
-        ClusterEncoder encoder;
+        // Clustering is most of the encoding's time: done for every node on input.threads
+        // threads first, then packed into pages in the nodes' order (deterministic bytes).
+        std::vector<EncodedPayload> encoded(tree.order.size());
+        if (hasGeometry) {
+            std::vector<std::size_t> work; // positions in tree.order with triangles of their own
+            for (std::size_t i = 0; i < tree.order.size(); ++i) {
+                const BuildNode& node = nodes[tree.order[i]];
+                if (placed.count(tree.order[i]) == 0 && node.triangleCount > 0 && !isInstance(node))
+                    work.push_back(i);
+            }
+            FF_RETURN_IF_ERROR(encodePayloads(
+                    nodes, tree.order, work, triangles, *input.grid, input.threads, encoded));
+        }
         ClusterPagePacker packer(writer, input.prototype);
-        std::vector<std::byte> clusters;
         std::vector<bool> local; // per rep: a page of this packer, to relocate
-        for (const std::uint32_t n : tree.order) {
+        for (std::size_t i = 0; i < tree.order.size(); ++i) {
+            const std::uint32_t n = tree.order[i];
             const BuildNode& node = nodes[n];
             firstRep[n] = static_cast<std::uint32_t>(reps.size());
             if (const auto p = placed.find(n); p != placed.end()) {
@@ -159,16 +220,13 @@ Result<SubtreeV2Result> writeSubtreeV2(
                 if (!hasGeometry)
                     return Status(
                             ErrorCode::Internal, "triangles in a hierarchy written without a grid");
-                clusters.clear();
-                const auto run = std::span<const storage::PackedTriangle>(triangles).subspan(
-                        node.firstTriangle, node.triangleCount);
-                FF_ASSIGN_OR_RETURN(
-                        const ClusterBuildStats stats, encoder.encode(run, *input.grid, clusters));
-                result.clusters += stats;
-                ownKept[n] = stats.trianglesKept;
-                FF_RETURN_IF_ERROR(
-                        packer.place(clusters, static_cast<std::uint32_t>(stats.clusters), reps));
+                const EncodedPayload& payload = encoded[i];
+                result.clusters += payload.stats;
+                ownKept[n] = payload.stats.trianglesKept;
+                FF_RETURN_IF_ERROR(packer.place(
+                        payload.bytes, static_cast<std::uint32_t>(payload.stats.clusters), reps));
                 local.resize(reps.size(), true);
+                encoded[i] = EncodedPayload{}; // its memory back as it goes
             }
             repCount[n] = static_cast<std::uint32_t>(reps.size()) - firstRep[n];
             if (repCount[n] > 255)

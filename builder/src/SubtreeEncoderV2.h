@@ -71,6 +71,8 @@ struct SubtreeV2Input {
     std::span<const std::uint64_t> instanceTriangles;
     /** Every node with placedChildren or placedTriangles, resolved. */
     std::span<const PlacedNodeV2> placed;
+    /** Threads that cluster the nodes' triangles (the bytes do not depend on it). */
+    unsigned threads = 1;
 };
 
 struct SubtreeV2Result {
