@@ -7,6 +7,7 @@
 #include <deque>
 #include <string>
 #include <unordered_map>
+#include <unordered_set>
 #include <vector>
 
 namespace ff::storage {
@@ -26,7 +27,10 @@ struct Pending {
     std::int64_t prototype = kInstanceLevel; ///< whose hierarchy; its grid decodes the clusters
 };
 
-/** The cluster pages met so far, indexed and decoded once each. */
+/** The cluster pages met so far: each indexed and decoded when first met; the indices of the
+ *  last kHeldPages kept for the representations that follow (a walk meets a page's nodes close
+ *  together), so memory stays bounded whatever the file (a 10^9-triangle terrain has 5 M
+ *  clusters). A page met again after its index went is indexed again, not decoded again. */
 class ClusterPages {
 public:
     ClusterPages(const SceneIndex& index, IPageSource& source)
@@ -39,7 +43,14 @@ public:
             return corrupt(r.page, "a representation names a page outside the file");
         auto found = mPages.find(r.page);
         if (found == mPages.end()) {
-            FF_ASSIGN_OR_RETURN(ClusterPageIndex page, indexPage(r.page));
+            const bool seen = mDecoded.count(r.page) != 0;
+            FF_ASSIGN_OR_RETURN(ClusterPageIndex page, indexPage(r.page, !seen));
+            mDecoded.insert(r.page);
+            if (mHeld.size() == kHeldPages) {
+                mPages.erase(mHeld.front());
+                mHeld.pop_front();
+            }
+            mHeld.push_back(r.page);
             found = mPages.emplace(r.page, std::move(page)).first;
         }
         const ClusterPageIndex& page = found->second;
@@ -59,10 +70,12 @@ public:
     }
 
     std::uint64_t clusters = 0;
-    [[nodiscard]] std::uint64_t pages() const noexcept { return mPages.size(); }
+    [[nodiscard]] std::uint64_t pages() const noexcept { return mDecoded.size(); }
 
 private:
-    Result<ClusterPageIndex> indexPage(std::uint64_t pageIndex) {
+    static constexpr std::size_t kHeldPages = 256;
+
+    Result<ClusterPageIndex> indexPage(std::uint64_t pageIndex, bool decode) {
         FF_ASSIGN_OR_RETURN(const PagePin pin, mSource.pinPage(pageIndex));
         FF_RETURN_IF_ERROR(checkType(
                 readTrailer(pin.bytes()).pageType, pageIndex, maskOf(PageType::Geometry)));
@@ -75,6 +88,8 @@ private:
                     pageIndex,
                     "clusters of prototype " + std::to_string(page->prototype) + ", the file has " +
                             std::to_string(mIndex.prototypesV2().size()));
+        if (!decode)
+            return page;
         // Decoded once here, so a stream that indexes but does not decode is found too.
         std::vector<PackedVertex> vertices(page->vertexCount);
         std::vector<std::uint8_t> indices(page->indexCount);
@@ -88,7 +103,9 @@ private:
 
     const SceneIndex& mIndex;
     IPageSource& mSource;
-    std::unordered_map<std::uint64_t, ClusterPageIndex> mPages;
+    std::unordered_map<std::uint64_t, ClusterPageIndex> mPages; ///< the held indices
+    std::deque<std::uint64_t> mHeld;                            ///< their pages, oldest first
+    std::unordered_set<std::uint64_t> mDecoded;                 ///< every page met (8 bytes each)
 };
 
 } // namespace
