@@ -147,7 +147,7 @@ Status LevelRegionsV2::append(LevelledSubtree& chunk, ChunkClustersV2& clusters)
                     ErrorCode::Unsupported,
                     "a node needs more than 255 representations; use a larger --page-size");
     }
-    mStoredTriangles += root.storedTriangles;
+    // The root's own triangles are counted with the tree above, whose record the root is.
 
     const std::uint64_t payloadBytes = storage::pagePayloadBytes(mWriter.pageSize());
     std::vector<PendingNodeV2> pending;

@@ -4,6 +4,7 @@
 #include <ff/storage/HierarchyCheck.h>
 #include <ff/storage/NodePageV2.h>
 
+#include <algorithm>
 #include <deque>
 #include <string>
 #include <unordered_map>
@@ -185,7 +186,9 @@ Result<HierarchySummary> checkHierarchyV2(
             }
         }
         if (node.childCount > 0) {
-            if (std::uint64_t{node.firstChild} + node.childCount > slots)
+            // In 64 bits: node indices are 32-bit, a garbage one near 2^32 must not wrap.
+            if (std::uint64_t{node.firstChild} + node.childCount >
+                std::min<std::uint64_t>(slots, 0xFFFFFFFFull))
                 return corrupt(where.page, slot + "children outside the node slots");
             // Children sit in one page: the first and last must be on the same one.
             FF_ASSIGN_OR_RETURN(const NodeRef first, index.nodeLocation(node.firstChild));

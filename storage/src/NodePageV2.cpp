@@ -9,8 +9,7 @@ namespace ff::storage {
 using detail::corrupt;
 
 NodePageV2Writer::NodePageV2Writer(std::uint32_t pageSize)
-    : mBytes(pagePayloadBytes(pageSize))
-    , mSlots(nodesPerPageV2(pageSize)) {}
+    : mBytes(pagePayloadBytes(pageSize)) {}
 
 bool NodePageV2Writer::fits(std::uint32_t nodes, std::uint32_t representations) const noexcept {
     const std::uint64_t used =
@@ -89,8 +88,8 @@ Status readRepresentationsV2(
         std::uint64_t page,
         const NodeV2& node,
         std::vector<RepresentationRecord>& out) {
-    if (node.kind != NodeKindV2::Cell)
-        return Status::ok();
+    if (node.kind != NodeKindV2::Cell || node.representationCount == 0)
+        return Status::ok(); // readNodeV2's rule: no representations, nothing to place
     const std::uint64_t reach =
             kRepresentationRecordSize *
             (std::uint64_t{node.firstRepresentation} + node.representationCount);

@@ -76,6 +76,9 @@ std::string findSectionTableProblem(
         } else {
             if (shared && s.offset >= pagePayloadBytes(pageSize))
                 return name + ": offset " + std::to_string(s.offset) + " past a page's payload";
+            // Before any sum with it: a garbage length must not wrap the arithmetic below.
+            if (s.byteLength > pageCount * std::uint64_t{pagePayloadBytes(pageSize)})
+                return name + ": byte length " + std::to_string(s.byteLength) + " larger than the file";
             const std::uint64_t start = shared ? s.offset : 0;
             const std::uint64_t needed = s.byteLength == 0 ? 0 : sectionPagesFor(start + s.byteLength, pageSize);
             if (s.pageCount != needed)

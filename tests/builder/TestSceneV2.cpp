@@ -260,6 +260,28 @@ TEST(SceneV2Test, AChunkedPrototypeDecodesToItsInputLikeOneBuiltWhole) {
     EXPECT_EQ(report.leafNodes, wholeReport.leafNodes);
 }
 
+TEST(SceneV2Test, ChunkRootsThatHoldTrianglesAreCountedOnce) {
+    // A dense cluster and a sparse one far away: the sparse cell is a chunk of a few hundred
+    // triangles, collapsed into its root, whose payload the tree above the chunks writes.
+    const fs::path dir = freshTestDir();
+    std::vector<storage::PackedTriangle> triangles =
+            cluster(150000, glm::vec3(0.0f), glm::vec3(10.0f), 1);
+    const auto sparse = cluster(600, glm::vec3(90.0f), glm::vec3(100.0f), 2);
+    triangles.insert(triangles.end(), sparse.begin(), sparse.end());
+    const RecordingSink scene = singlePrototypeScene(triangles);
+    BuildOptions options = v2Options();
+    options.memoryBudgetBytes = SceneBuilder::kMinimumBudgetBytes;
+    const BuildReport report = buildOrFail(scene, dir / "v2.ffs", options);
+    EXPECT_GT(report.chunks, 1u);
+    EXPECT_EQ(report.storedTriangles, triangles.size());
+    auto file = openOrFail(dir / "v2.ffs");
+    ASSERT_NE(file, nullptr);
+    Result<storage::HierarchySummary> summary = storage::checkHierarchyV2(*file, file->source());
+    ASSERT_TRUE(summary.isOk()) << summary.status().toString();
+    EXPECT_EQ(summary->triangles, triangles.size());
+    EXPECT_EQ(decodeThroughHierarchy(*file)[0], inputKeys(file->prototypesV2()[0].grid, triangles));
+}
+
 void reseal(std::vector<std::byte>& bytes, std::uint32_t pageSize, std::uint64_t page) {
     const std::size_t base = static_cast<std::size_t>(page) * pageSize;
     const std::uint64_t sum = XXH3_64bits(bytes.data() + base, pageSize - 8);

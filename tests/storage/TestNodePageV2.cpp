@@ -244,5 +244,31 @@ TEST(SceneIndexV2Test, VersionOneStructSizesInAVersionTwoHeaderAreRefused) {
     EXPECT_EQ(file.status().message(), "page 0: nodeRecordSize is 96, version 2 has 48");
 }
 
+TEST(SceneIndexV2Test, AStreamLengthThatWouldWrapIsRefused) {
+    // With an offset, offset + byteLength could wrap to a small page count: refused first.
+    const auto dir = freshTestDir();
+    std::vector<std::byte> bytes = readBytes(writeV2File(dir, 0));
+    const FileHeader header = test::loadAt<FileHeader>(bytes, 0);
+    bool changed = false;
+    for (std::uint32_t i = 0; i < header.sectionCount; ++i) {
+        const std::size_t at = sizeof(FileHeader) + i * sizeof(SectionEntry);
+        SectionEntry entry = test::loadAt<SectionEntry>(bytes, at);
+        if (static_cast<SectionType>(entry.type) != SectionType::Metadata)
+            continue;
+        ASSERT_GT(entry.offset, 0u);               // after the prototype record
+        entry.byteLength = ~std::uint64_t{0} - 10; // offset + this wraps past 2^64
+        test::storeAt(bytes, at, entry);
+        changed = true;
+    }
+    ASSERT_TRUE(changed);
+    test::resealPage(bytes, kPage, 0);
+    test::writeBytes(dir / "bad.ffs", bytes);
+    auto file = SceneFile::open(dir / "bad.ffs");
+    ASSERT_FALSE(file.isOk());
+    EXPECT_EQ(file.status().code(), ErrorCode::Corrupt);
+    EXPECT_NE(file.status().message().find("larger than the file"), std::string::npos)
+            << file.status().message();
+}
+
 } // namespace
 } // namespace ff::storage

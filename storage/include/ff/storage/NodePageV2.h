@@ -55,7 +55,6 @@ public:
 
 private:
     std::vector<std::byte> mBytes;
-    std::uint32_t mSlots = 0; ///< slot capacity of an empty page
     std::uint32_t mNodes = 0;
     std::uint32_t mRepresentations = 0;
 };
