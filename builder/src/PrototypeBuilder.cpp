@@ -63,12 +63,6 @@ void addToSummary(const BuildNode& node, PrototypeSummary& summary) {
 }
 
 /** A hierarchy as built, before its layout: what the tree above it and the report need. */
-struct BuiltHierarchy {
-    std::vector<BuildNode> nodes; ///< nodes[0] is the root
-    PrototypeSummary summary;
-    std::uint64_t leafNodes = 0;
-};
-
 // Builds one hierarchy completely in memory. Runs on worker threads: touches only its arguments.
 BuiltHierarchy buildInMemoryHierarchy(
         std::vector<storage::PackedTriangle>& triangles,
@@ -173,8 +167,7 @@ Result<PrototypeBuildResult> PrototypeBuilder::build(
     const std::uint64_t triangleCount = triangles.count(); // building consumes the run file
     Result<PrototypeBuildResult> result = triangleCount > mChunkTriangles
             ? buildChunked(prototypeId, triangles, root, encoding, spillBytes)
-            : v2 ? buildInMemoryV2(triangles, root, *encoding)
-                 : buildInMemory(triangles, root);
+            : buildInMemory(triangles, root, encoding);
     if (!result)
         return result.status().withContext("prototype " + std::to_string(prototypeId));
     // v1 stores every triangle it was given; v2 those the codec kept (what it reports).
@@ -183,10 +176,13 @@ Result<PrototypeBuildResult> PrototypeBuilder::build(
     return result;
 }
 
-Result<PrototypeBuildResult> PrototypeBuilder::buildInMemory(RunFile& triangles, const Cell& root) {
+Result<PrototypeBuildResult> PrototypeBuilder::buildInMemory(
+        RunFile& triangles, const Cell& root, const PrototypeEncodingV2* encoding) {
     FF_ASSIGN_OR_RETURN(std::vector<storage::PackedTriangle> all, triangles.readAll());
     triangles.remove();
     BuiltHierarchy built = buildInMemoryHierarchy(all, root, 0, 0, mParams, mGrid);
+    if (encoding != nullptr)
+        return writeInMemoryV2(std::move(all), std::move(built), *encoding);
     const glm::vec3 boundsMin = built.nodes[0].boundsMin;
     const glm::vec3 boundsMax = built.nodes[0].boundsMax;
     PrototypeBuildResult result;
@@ -206,11 +202,8 @@ Result<PrototypeBuildResult> PrototypeBuilder::buildInMemory(RunFile& triangles,
     return result;
 }
 
-Result<PrototypeBuildResult> PrototypeBuilder::buildInMemoryV2(
-        RunFile& triangles, const Cell& root, const PrototypeEncodingV2& encoding) {
-    FF_ASSIGN_OR_RETURN(std::vector<storage::PackedTriangle> all, triangles.readAll());
-    triangles.remove();
-    BuiltHierarchy built = buildInMemoryHierarchy(all, root, 0, 0, mParams, mGrid);
+Result<PrototypeBuildResult> PrototypeBuilder::writeInMemoryV2(
+        std::vector<storage::PackedTriangle> all, BuiltHierarchy built, const PrototypeEncodingV2& encoding) {
     const glm::vec3 boundsMin = built.nodes[0].boundsMin;
     const glm::vec3 boundsMax = built.nodes[0].boundsMax;
     SubtreeV2Input input;

@@ -50,6 +50,13 @@ struct PrototypeBuildResult {
     std::uint64_t nodePages = 0;
 };
 
+/** A hierarchy built in memory, before it is written. */
+struct BuiltHierarchy {
+    std::vector<BuildNode> nodes; ///< nodes[0] is the root
+    PrototypeSummary summary;
+    std::uint64_t leafNodes = 0;
+};
+
 /** How a v2 build encodes one prototype's geometry. */
 struct PrototypeEncodingV2 {
     storage::PositionGrid grid;      ///< its clusters' grid
@@ -99,9 +106,12 @@ public:
 
 private:
 
-    [[nodiscard]] Result<PrototypeBuildResult> buildInMemory(RunFile& triangles, const Cell& root);
-    [[nodiscard]] Result<PrototypeBuildResult> buildInMemoryV2(
-            RunFile& triangles, const Cell& root, const PrototypeEncodingV2& encoding);
+    /** Reads the prototype, builds its hierarchy in memory and writes it: format 1, or format 2
+     *  with `encoding`. */
+    [[nodiscard]] Result<PrototypeBuildResult>
+    buildInMemory(RunFile& triangles, const Cell& root, const PrototypeEncodingV2* encoding);
+    [[nodiscard]] Result<PrototypeBuildResult> writeInMemoryV2(
+            std::vector<storage::PackedTriangle> all, BuiltHierarchy built, const PrototypeEncodingV2& encoding);
     [[nodiscard]] Result<PrototypeBuildResult> buildChunked(
             std::uint32_t prototypeId,
             RunFile& triangles,
