@@ -29,8 +29,8 @@ template <typename T> std::size_t capacityBytes(const std::vector<T>& v) {
 BackToFrontTraversal::BackToFrontTraversal(const storage::SceneIndex& scene, IPageAccess& pages)
     : mScene(scene)
     , mNodePages(std::make_unique<detail::NodePages>(scene, pages))
-    , mPrototypeGeometry(scene.prototypes().size())
-    , mPrototypeGeometryReady(scene.prototypes().size(), false) {
+    , mPrototypeGeometry(scene.prototypeCount())
+    , mPrototypeGeometryReady(scene.prototypeCount(), false) {
     // References into the chain stay valid while the walk recurses below them.
     mActive.reserve(kMaxNesting + 2);
 }
@@ -84,9 +84,9 @@ Status BackToFrontTraversal::walk(Pass pass, FrameStats& stats) {
     if (mFrame->selection.method == Method::Full) {
         walkFull();
     } else {
-        const storage::NodeRef rootRef = mScene.header().root;
+        storage::NodeRef rootRef{};
         storage::NodeRecord root{};
-        if (mNodePages->readNode(rootRef, kTopPriority, root) == Fetch::Ready)
+        if (mNodePages->root(kTopPriority, rootRef, root) == Fetch::Ready)
             visit(root, rootRef, 0, 0);
         else if (!mNodePages->newFailures().empty())
             return mNodePages->newFailures().front().withContext("the root node is unreadable");
@@ -178,9 +178,9 @@ void BackToFrontTraversal::visit(
     if (!detail::isCell(node)) {
         const std::uint32_t instanceIndex = node.geometryPage;
         const storage::InstanceRecord& instance = mScene.instances()[instanceIndex];
-        const storage::NodeRef rootRef = mScene.prototypes()[instance.prototype].root;
+        storage::NodeRef rootRef{};
         storage::NodeRecord root{};
-        if (mNodePages->readNode(rootRef, priority, root) != Fetch::Ready) {
+        if (mNodePages->prototypeRoot(instance.prototype, priority, rootRef, root) != Fetch::Ready) {
             defer(node, ref, active);
             return;
         }
@@ -206,14 +206,14 @@ void BackToFrontTraversal::visit(
         return;
     }
     for (const detail::PayloadRun& run : mRuns)
-        emitGeometry(run.segment, run.payload, active);
+        emitGeometry(run, active);
 
     // Children farthest first (in world distance), so cubes drawn later blend over what lies
     // behind them.
     const std::size_t base = mChildStack.size();
     for (std::uint32_t c = 0; c < node.childCount; ++c) {
         const storage::NodeRef childRef = storage::SceneIndex::childRef(node, c);
-        Result<storage::NodeRecord> child = mScene.decodeNode(childPage, childRef);
+        Result<storage::NodeRecord> child = mNodePages->child(node, childPage, c);
         if (!child) {
             mNodePages->reportFailure(child.status());
             mChildStack.resize(base);
@@ -235,13 +235,18 @@ void BackToFrontTraversal::visit(
     mChildStack.resize(base);
 }
 
-void BackToFrontTraversal::emitGeometry(
-        const storage::GeometrySegment& segment, const std::byte* payload, std::size_t active) {
-    mStats->trianglesDrawn += segment.count;
+void BackToFrontTraversal::emitGeometry(const detail::PayloadRun& run, std::size_t active) {
+    mStats->trianglesDrawn += run.triangles;
     if (mPass == Pass::CubesOnly)
         return;
     mList.geometry.push_back(
-            {segment.page, payload, segment.firstSlot, segment.count, mActive[active].listIndex});
+            {run.page,
+             run.payload,
+             run.first,
+             run.count,
+             mActive[active].listIndex,
+             run.triangles,
+             run.payloadBytes});
     flushIfFull();
 }
 
@@ -273,17 +278,18 @@ void BackToFrontTraversal::emitCube(
 // The whole prototype tree, once, merged into per-page runs. Pages that are not Ready yet
 // leave the list incomplete and it is rebuilt on a later frame.
 void BackToFrontTraversal::collectPrototypeGeometry(std::uint32_t prototype) {
-    std::vector<storage::GeometrySegment>& merged = mPrototypeGeometry[prototype];
+    std::vector<detail::PayloadRun>& merged = mPrototypeGeometry[prototype];
     merged.clear();
     bool complete = true;
     std::vector<storage::NodeRecord> stack;
+    storage::NodeRef rootRef{};
     storage::NodeRecord root{};
-    if (mNodePages->readNode(mScene.prototypes()[prototype].root, kTopPriority, root) != Fetch::Ready)
+    if (mNodePages->prototypeRoot(prototype, kTopPriority, rootRef, root) != Fetch::Ready)
         return;
     stack.push_back(root);
     // A prototype has at most the file's nodeCount nodes; more means a reference cycle.
     std::uint64_t budget = mScene.header().nodeCount + 1;
-    std::vector<storage::GeometrySegment> runs;
+    std::vector<detail::PayloadRun> runs;
     while (!stack.empty()) {
         if (budget-- == 0) {
             mNodePages->reportFailure(
@@ -295,39 +301,39 @@ void BackToFrontTraversal::collectPrototypeGeometry(std::uint32_t prototype) {
         const storage::NodeRecord node = stack.back();
         stack.pop_back();
         runs.clear();
-        bool nodeReady = true;
-        if (Status status = mScene.geometrySegments(node, runs); !status) {
-            mNodePages->reportFailure(status);
-            nodeReady = false;
-        }
-        for (const storage::GeometrySegment& s : runs) {
-            std::span<const std::byte> payload;
-            if (mNodePages->fetch(s.page, storage::PageType::Geometry, kTopPriority, payload) != Fetch::Ready)
-                nodeReady = false;
-        }
-        if (nodeReady)
+        if (mNodePages->payloadRuns(node, kTopPriority, runs) == Fetch::Ready)
             merged.insert(merged.end(), runs.begin(), runs.end());
         else
             complete = false;
+        std::span<const std::byte> childPage;
+        if (node.childCount > 0 &&
+            mNodePages->childPage(node, kTopPriority, childPage) != Fetch::Ready) {
+            complete = false;
+            continue;
+        }
         for (std::uint32_t c = 0; c < node.childCount; ++c) {
-            storage::NodeRecord child{};
-            if (mNodePages->readNode(storage::SceneIndex::childRef(node, c), kTopPriority, child) ==
-                Fetch::Ready)
-                stack.push_back(child);
-            else
+            Result<storage::NodeRecord> child = mNodePages->child(node, childPage, c);
+            if (child) {
+                stack.push_back(*child);
+            } else {
+                mNodePages->reportFailure(child.status());
                 complete = false;
+            }
         }
     }
+    // Only where runs lie is kept: the pages' bytes are looked up again each frame.
     std::sort(merged.begin(), merged.end(), [](const auto& a, const auto& b) {
-        return a.page != b.page ? a.page < b.page : a.firstSlot < b.firstSlot;
+        return a.page != b.page ? a.page < b.page : a.first < b.first;
     });
     runs.clear();
-    for (const storage::GeometrySegment& s : merged) {
-        if (!runs.empty() && runs.back().page == s.page &&
-            runs.back().firstSlot + runs.back().count == s.firstSlot)
-            runs.back().count += s.count;
-        else
-            runs.push_back(s);
+    for (const detail::PayloadRun& r : merged) {
+        if (!runs.empty() && runs.back().page == r.page &&
+            runs.back().first + runs.back().count == r.first) {
+            runs.back().count += r.count;
+            runs.back().triangles += r.triangles;
+        } else {
+            runs.push_back(r);
+        }
     }
     merged = std::move(runs);
     mPrototypeGeometryReady[prototype] = complete;
@@ -340,15 +346,17 @@ void BackToFrontTraversal::walkFull() {
         if (!mPrototypeGeometryReady[instance.prototype])
             collectPrototypeGeometry(instance.prototype);
         pushActive(detail::instanceTransform(instance), childInstancePath(0, i));
-        for (const storage::GeometrySegment& s : mPrototypeGeometry[instance.prototype]) {
+        for (detail::PayloadRun run : mPrototypeGeometry[instance.prototype]) {
             std::span<const std::byte> payload;
-            if (mNodePages->fetch(s.page, storage::PageType::Geometry, kTopPriority, payload) != Fetch::Ready)
+            if (mNodePages->fetch(run.page, storage::PageType::Geometry, kTopPriority, payload) != Fetch::Ready)
                 continue;
-            if (!mServices->uploads.admit(s.page)) {
+            if (!mServices->uploads.admit(run.page)) {
                 ++mStats->uploadsRefused;
                 continue;
             }
-            emitGeometry(s, payload.data(), mActive.size() - 1);
+            run.payload = payload.data();
+            run.payloadBytes = static_cast<std::uint32_t>(payload.size());
+            emitGeometry(run, mActive.size() - 1);
         }
         mActive.pop_back();
     }

@@ -1,5 +1,9 @@
 #include "NodePages.h"
 
+#include "ClusterPageDecoder.h"
+
+#include <ff/storage/NodePageV2.h>
+
 #include <algorithm>
 #include <cmath>
 
@@ -109,15 +113,16 @@ std::size_t mergeGeometryDraws(std::vector<GeometryDraw>& draws) {
     std::sort(draws.begin(), draws.end(), [](const GeometryDraw& a, const GeometryDraw& b) {
         if (a.transform != b.transform)
             return a.transform < b.transform;
-        return a.page != b.page ? a.page < b.page : a.firstTriangle < b.firstTriangle;
+        return a.page != b.page ? a.page < b.page : a.first < b.first;
     });
     std::size_t out = 0;
     for (std::size_t i = 0; i < draws.size(); ++i) {
         if (out > 0) {
             GeometryDraw& last = draws[out - 1];
             if (last.transform == draws[i].transform && last.page == draws[i].page &&
-                last.firstTriangle + last.triangleCount == draws[i].firstTriangle) {
-                last.triangleCount += draws[i].triangleCount;
+                last.first + last.count == draws[i].first) {
+                last.count += draws[i].count;
+                last.triangles += draws[i].triangles;
                 continue;
             }
         }
@@ -173,17 +178,142 @@ Fetch NodePages::fetch(
     return Fetch::Missing;
 }
 
-Fetch NodePages::readNode(storage::NodeRef ref, float priority, storage::NodeRecord& out) {
+namespace {
+
+std::vector<storage::PrototypeRecord> prototypeRecords(const storage::SceneIndex& scene) {
+    if (scene.formatVersion() != storage::kFormatVersion2)
+        return scene.prototypes();
+    std::vector<storage::PrototypeRecord> records;
+    records.reserve(scene.prototypesV2().size());
+    for (const storage::PrototypeV2& p : scene.prototypesV2()) {
+        // The index checked every root against the node slots when it was read.
+        const Result<storage::NodeRef> root = scene.nodeLocation(p.rootNode);
+        records.push_back(
+                {root ? *root : storage::kNullNodeRef,
+                 p.bounds.min,
+                 p.bounds.max,
+                 p.triangleCount,
+                 p.nodeCount});
+    }
+    return records;
+}
+
+std::uint32_t bytesOf(std::span<const std::byte> payload) {
+    return static_cast<std::uint32_t>(payload.size()); // a page's: far below 4 GiB
+}
+
+Status corruptPage(std::uint64_t page, const std::string& what) {
+    return Status(ErrorCode::Corrupt, "page " + std::to_string(page) + ": " + what);
+}
+
+} // namespace
+
+Result<storage::NodeRef> sceneRoot(const storage::SceneIndex& scene) {
+    if (scene.formatVersion() != storage::kFormatVersion2)
+        return scene.header().root;
+    if ((scene.header().flags & storage::kFileV2HasRoot) == 0)
+        return Status(ErrorCode::Corrupt, "page 0: the scene has no root node");
+    return scene.nodeLocation(scene.header().root.page);
+}
+
+NodePages::NodePages(const storage::SceneIndex& scene, IPageAccess& pages)
+    : mScene(scene)
+    , mPages(pages)
+    , mV2(scene.formatVersion() == storage::kFormatVersion2)
+    , mPrototypes(prototypeRecords(scene)) {
+    const Result<storage::NodeRef> root = sceneRoot(scene);
+    mRoot = root ? *root : storage::kNullNodeRef; // a null root fails as the root's read
+}
+
+Fetch NodePages::readTop(
+        storage::NodeRef ref,
+        const storage::NodeBox& box,
+        float priority,
+        storage::NodeRecord& out) {
+    if (ref == storage::kNullNodeRef) {
+        reportFailure(Status(ErrorCode::Corrupt, "page 0: the scene has no root node"));
+        return Fetch::Missing;
+    }
     std::span<const std::byte> payload;
     if (fetch(ref.page, storage::PageType::Nodes, priority, payload) != Fetch::Ready)
         return Fetch::Missing;
-    Result<storage::NodeRecord> node = mScene.decodeNode(payload, ref);
+    Result<storage::NodeRecord> node =
+            mV2 ? decodeV2(payload, ref, box, 0) : mScene.decodeNode(payload, ref);
     if (!node) {
         reportFailure(node.status());
         return Fetch::Missing;
     }
     out = *node;
     return Fetch::Ready;
+}
+
+Fetch NodePages::root(float priority, storage::NodeRef& ref, storage::NodeRecord& out) {
+    ref = mRoot;
+    const storage::FileHeader& h = mScene.header();
+    return readTop(ref, {h.boundsMin, h.boundsMax}, priority, out);
+}
+
+Fetch NodePages::prototypeRoot(
+        std::uint32_t prototype, float priority, storage::NodeRef& ref, storage::NodeRecord& out) {
+    const storage::PrototypeRecord& p = mPrototypes[prototype];
+    ref = p.root;
+    return readTop(ref, {p.boundsMin, p.boundsMax}, priority, out);
+}
+
+Result<storage::NodeRecord> NodePages::child(
+        const storage::NodeRecord& parent,
+        std::span<const std::byte> childPage,
+        std::uint32_t index) const {
+    const storage::NodeRef ref = storage::SceneIndex::childRef(parent, index);
+    if (!mV2)
+        return mScene.decodeNode(childPage, ref);
+    return decodeV2(
+            childPage,
+            ref,
+            {parent.boundsMin, parent.boundsMax},
+            static_cast<std::uint8_t>(std::min(parent.level + 1, 255)));
+}
+
+Result<storage::NodeRecord> NodePages::decodeV2(
+        std::span<const std::byte> payload,
+        storage::NodeRef ref,
+        const storage::NodeBox& parent,
+        std::uint8_t level) const {
+    FF_ASSIGN_OR_RETURN(
+            const storage::NodeV2 node, storage::readNodeV2(payload, ref.page, ref.slot, parent));
+    storage::NodeRecord r{};
+    r.cellMin = r.boundsMin = node.bounds.min;
+    r.cellMax = r.boundsMax = node.bounds.max;
+    r.cube = node.cube;
+    r.childCount = node.childCount;
+    r.level = level;
+    r.flags = (node.flags & storage::kNodeV2HasCube) ? storage::kNodeHasCube : 0;
+    if (node.childCount > 0) {
+        // Children are consecutive in one page: the last must be where the first's page ends.
+        Result<storage::NodeRef> first = mScene.nodeLocation(node.firstChild);
+        if (!first || first->slot + std::uint64_t{node.childCount} >
+                              storage::nodesPerPageV2(mScene.pageSize()))
+            return corruptPage(
+                    ref.page,
+                    "node slot " + std::to_string(ref.slot) +
+                            ": children outside the node slots or across a page end");
+        r.firstChild = *first;
+    }
+    if (node.kind == storage::NodeKindV2::Instance) {
+        if (node.firstRepresentation >= mScene.instances().size())
+            return corruptPage(
+                    ref.page,
+                    "node slot " + std::to_string(ref.slot) + ": instance " +
+                            std::to_string(node.firstRepresentation) + " out of range");
+        r.kind = static_cast<std::uint8_t>(storage::NodeKind::Instance);
+        r.geometryPage = node.firstRepresentation;
+    } else {
+        r.kind = static_cast<std::uint8_t>(storage::NodeKind::Cell);
+        r.geometryPage = ref.page;
+        r.geometryFirst = node.firstRepresentation;
+        r.geometryCount = node.representationCount;
+    }
+    return r;
 }
 
 Fetch NodePages::childPage(
@@ -197,8 +327,26 @@ Fetch NodePages::collectGeometry(
         IUploadGate& uploads,
         std::vector<PayloadRun>& out) {
     out.clear();
+    Fetch result = payloadRuns(node, priority, out);
+    std::size_t kept = 0;
+    for (const PayloadRun& run : out) {
+        if (!uploads.admit(run.page)) {
+            ++mStats->uploadsRefused;
+            result = Fetch::Missing;
+        } else {
+            out[kept++] = run;
+        }
+    }
+    out.resize(kept);
+    return result;
+}
+
+Fetch NodePages::payloadRuns(
+        const storage::NodeRecord& node, float priority, std::vector<PayloadRun>& out) {
     if (node.geometryCount == 0 || !isCell(node))
         return Fetch::Ready;
+    if (mV2)
+        return clusterRuns(node, priority, out);
     mRuns.clear();
     if (Status status = mScene.geometrySegments(node, mRuns); !status) {
         reportFailure(status);
@@ -207,14 +355,54 @@ Fetch NodePages::collectGeometry(
     Fetch result = Fetch::Ready;
     for (const storage::GeometrySegment& s : mRuns) {
         std::span<const std::byte> payload;
-        if (fetch(s.page, storage::PageType::Geometry, priority, payload) != Fetch::Ready) {
+        if (fetch(s.page, storage::PageType::Geometry, priority, payload) != Fetch::Ready)
             result = Fetch::Missing;
-        } else if (!uploads.admit(s.page)) {
-            ++mStats->uploadsRefused;
+        else
+            out.push_back(
+                    {s.page, payload.data(), s.firstSlot, s.count, s.count, bytesOf(payload)});
+    }
+    return result;
+}
+
+// A format 2 cell's payloads: its representations, in its own page, name runs of whole clusters
+// in cluster pages the cache decoded (ClusterPageDecoder). Kinds this build does not draw are
+// passed over, so a file with a later issue's kinds still draws its clusters.
+Fetch NodePages::clusterRuns(
+        const storage::NodeRecord& node, float priority, std::vector<PayloadRun>& out) {
+    std::span<const std::byte> nodePage;
+    if (fetch(node.geometryPage, storage::PageType::Nodes, priority, nodePage) != Fetch::Ready)
+        return Fetch::Missing;
+    storage::NodeV2 cell;
+    cell.firstRepresentation = node.geometryFirst;
+    cell.representationCount = static_cast<std::uint8_t>(node.geometryCount);
+    mRepresentations.clear();
+    if (Status status = storage::readRepresentationsV2(
+                nodePage, node.geometryPage, cell, mRepresentations);
+        !status) {
+        reportFailure(status);
+        return Fetch::Missing;
+    }
+    Fetch result = Fetch::Ready;
+    for (const storage::RepresentationRecord& r : mRepresentations) {
+        if (r.kind != storage::RepresentationKind::Clusters)
+            continue;
+        std::span<const std::byte> payload;
+        if (fetch(r.page, storage::PageType::Geometry, priority, payload) != Fetch::Ready) {
             result = Fetch::Missing;
-        } else {
-            out.push_back({s, payload.data()});
+            continue;
         }
+        Result<DecodedClusterPage> page = DecodedClusterPage::view(payload);
+        Result<storage::ClusterRun> run =
+                page ? page->run(r.offset, r.length, r.count) : Result<storage::ClusterRun>(page.status());
+        if (!run) {
+            reportFailure(corruptPage(r.page, run.status().message()));
+            result = Fetch::Missing;
+            continue;
+        }
+        std::uint32_t triangles = 0;
+        for (std::uint32_t c = run->first; c < run->first + run->count; ++c)
+            triangles += page->clusters()[c].info.triangleCount;
+        out.push_back({r.page, payload.data(), run->first, run->count, triangles, bytesOf(payload)});
     }
     return result;
 }

@@ -12,6 +12,7 @@
 #include <ff/runtime/Selection.h>
 #include <ff/runtime/TransformMetric.h>
 #include <ff/runtime/Traversal.h>
+#include <ff/storage/NodeRecordV2.h>
 #include <ff/storage/SceneIndex.h>
 
 #include <glm/glm.hpp>
@@ -97,10 +98,15 @@ Status nestingTooDeep();
  *  so ε = 0 reproduces --method full). Returns the draws left. */
 std::size_t mergeGeometryDraws(std::vector<GeometryDraw>& draws);
 
-/** A run of a node's own triangles with the bytes of its page. */
+/** A run of a node's own items in one Geometry page (GeometryDraw's first, count, triangles),
+ *  with the page's bytes as resident. */
 struct PayloadRun {
-    storage::GeometrySegment segment;
+    std::uint64_t page;
     const std::byte* payload;
+    std::uint32_t first;
+    std::uint32_t count;
+    std::uint32_t triangles;
+    std::uint32_t payloadBytes;
 };
 
 enum class Fetch { Ready, Missing };
@@ -109,12 +115,18 @@ enum class Fetch { Ready, Missing };
  * Node and geometry pages as a traversal reads them within one frame: through IPageAccess,
  * never waiting (a page not Ready is Missing and has been asked for), counting misses in the
  * frame's stats, and reporting each failed page once over the traversal's life.
+ *
+ * Both formats are read into storage::NodeRecord, the record every traversal walks. A format 2
+ * node (NodeRecordV2.h) becomes one with its decoded bounds as both boxes (its cube is drawn on
+ * them), its first child's page and slot (children are consecutive in one page), its depth as
+ * `level`, and, for a cell, its own page, first representation and representation count as
+ * geometryPage, geometryFirst and geometryCount (an instance keeps its instance index). A node's
+ * bounds decode against its parent's, so children are read through child() with the parent's
+ * record, roots through root() and prototypeRoot().
  */
 class NodePages {
 public:
-    NodePages(const storage::SceneIndex& scene, IPageAccess& pages)
-        : mScene(scene)
-        , mPages(pages) {}
+    NodePages(const storage::SceneIndex& scene, IPageAccess& pages);
 
     /** Starts a frame: failures met from now on go to newFailures(). */
     void beginFrame() { mNewFailures.clear(); }
@@ -126,17 +138,34 @@ public:
           storage::PageType type,
           float priority,
           std::span<const std::byte>& payload);
-    Fetch readNode(storage::NodeRef ref, float priority, storage::NodeRecord& out);
-    /** Fills `out` with the node's own geometry runs if every page is Ready and admitted by
+    /** The scene's root (the instance level). */
+    Fetch root(float priority, storage::NodeRef& ref, storage::NodeRecord& out);
+    /** The root of prototype `prototype`'s hierarchy. */
+    Fetch prototypeRoot(
+            std::uint32_t prototype, float priority, storage::NodeRef& ref, storage::NodeRecord& out);
+    /** The child page of a node that has children (Ready: `payload` holds it). */
+    Fetch
+    childPage(const storage::NodeRecord& node, float priority, std::span<const std::byte>& payload);
+    /** Child `index` of `parent`, read from its childPage(). Errors: Corrupt (not reported). */
+    [[nodiscard]] Result<storage::NodeRecord> child(
+            const storage::NodeRecord& parent,
+            std::span<const std::byte> childPage,
+            std::uint32_t index) const;
+    /** Fills `out` with the node's own payload runs if every page is Ready and admitted by
      *  `uploads` (every page is asked for before answering, so all are in flight together). */
     Fetch collectGeometry(
             const storage::NodeRecord& node,
             float priority,
             IUploadGate& uploads,
             std::vector<PayloadRun>& out);
-    /** The child page of a node that has children (Ready: `payload` holds it). */
-    Fetch
-    childPage(const storage::NodeRecord& node, float priority, std::span<const std::byte>& payload);
+    /** collectGeometry() without an upload gate, appending to `out`. */
+    Fetch payloadRuns(const storage::NodeRecord& node, float priority, std::vector<PayloadRun>& out);
+
+    /** The scene's prototypes as format 1 records (format 2's roots as page and slot), for
+     *  what traversals estimate from their counts and bounds. */
+    [[nodiscard]] const std::vector<storage::PrototypeRecord>& prototypes() const noexcept {
+        return mPrototypes;
+    }
 
     void reportFailure(const Status& failure);
     [[nodiscard]] const std::vector<Status>& newFailures() const noexcept { return mNewFailures; }
@@ -144,12 +173,29 @@ public:
     [[nodiscard]] FrameStats& stats() noexcept { return *mStats; }
 
 private:
+    /** Reads the node at `ref` of a hierarchy's top (bounds relative to `box` in format 2). */
+    Fetch readTop(storage::NodeRef ref, const storage::NodeBox& box, float priority, storage::NodeRecord& out);
+    [[nodiscard]] Result<storage::NodeRecord> decodeV2(
+            std::span<const std::byte> payload,
+            storage::NodeRef ref,
+            const storage::NodeBox& parent,
+            std::uint8_t level) const;
+    Fetch clusterRuns(const storage::NodeRecord& node, float priority, std::vector<PayloadRun>& out);
+
     const storage::SceneIndex& mScene;
     IPageAccess& mPages;
+    const bool mV2;
+    std::vector<storage::PrototypeRecord> mPrototypes;
+    storage::NodeRef mRoot{};
     FrameStats* mStats = nullptr;
     std::unordered_set<std::string> mReported; ///< messages ("page N: ...") already reported
     std::vector<Status> mNewFailures;
-    std::vector<storage::GeometrySegment> mRuns; ///< collectGeometry's scratch
+    std::vector<storage::GeometrySegment> mRuns; ///< format 1 scratch
+    std::vector<storage::RepresentationRecord> mRepresentations; ///< format 2 scratch
 };
+
+/** Where the scene's root node is: the header's root (format 1), or its node index's page and
+ *  slot (format 2). Errors: Corrupt. */
+[[nodiscard]] Result<storage::NodeRef> sceneRoot(const storage::SceneIndex& scene);
 
 } // namespace ff::runtime::detail

@@ -348,9 +348,9 @@ Status OcclusionTraversal::Impl::traverse(
 
     // Pass 1: opaque geometry, front to back, with occlusion tests.
     addTransform(glm::mat4(1.0f), 0, nullptr);
-    const storage::NodeRef rootRef = scene.header().root;
+    storage::NodeRef rootRef{};
     storage::NodeRecord root{};
-    if (nodePages.readNode(rootRef, detail::kTopPriority, root) != Fetch::Ready) {
+    if (nodePages.root(detail::kTopPriority, rootRef, root) != Fetch::Ready) {
         failures = nodePages.newFailures();
         if (!failures.empty())
             return failures.front().withContext("the root node is unreadable");
@@ -824,9 +824,8 @@ bool OcclusionTraversal::Impl::enterInstance(
         storage::NodeRecord& root) {
     const std::uint32_t instanceIndex = node.geometryPage;
     const storage::InstanceRecord& instance = scene.instances()[instanceIndex];
-    const storage::PrototypeRecord& prototype = scene.prototypes()[instance.prototype];
-    rootRef = prototype.root;
-    if (nodePages.readNode(rootRef, priority, root) != Fetch::Ready) {
+    const storage::PrototypeRecord& prototype = nodePages.prototypes()[instance.prototype];
+    if (nodePages.prototypeRoot(instance.prototype, priority, rootRef, root) != Fetch::Ready) {
         sawCube(node, parentTransform); // drawn as its cube (pass 2)
         return false;
     }
@@ -856,7 +855,7 @@ OcclusionTraversal::Impl::Expanded OcclusionTraversal::Impl::expandCell(
     const std::size_t base = children.size();
     for (std::uint32_t c = 0; c < node.childCount; ++c) {
         const storage::NodeRef childRef = storage::SceneIndex::childRef(node, c);
-        Result<storage::NodeRecord> record = scene.decodeNode(childPage, childRef);
+        Result<storage::NodeRecord> record = nodePages.child(node, childPage, c);
         if (!record) {
             nodePages.reportFailure(record.status());
             children.resize(base);
@@ -869,13 +868,15 @@ OcclusionTraversal::Impl::Expanded OcclusionTraversal::Impl::expandCell(
     if (drew) {
         const std::uint32_t index = listIndex(transform);
         for (const detail::PayloadRun& run : runs) {
-            stats->trianglesDrawn += run.segment.count;
+            stats->trianglesDrawn += run.triangles;
             list.geometry.push_back(
-                    {run.segment.page,
+                    {run.page,
                      run.payload,
-                     run.segment.firstSlot,
-                     run.segment.count,
-                     index});
+                     run.first,
+                     run.count,
+                     index,
+                     run.triangles,
+                     run.payloadBytes});
         }
         if (list.bytes() >= frame->budgets.drawBatchBytes)
             flush();
@@ -956,7 +957,7 @@ void OcclusionTraversal::Impl::drawSubtree(
 
 const storage::PrototypeRecord* OcclusionTraversal::Impl::prototypeBelow(const Entry& entry) const {
     if (!detail::isCell(entry.record))
-        return &scene.prototypes()[scene.instances()[entry.record.geometryPage].prototype];
+        return &nodePages.prototypes()[scene.instances()[entry.record.geometryPage].prototype];
     return transforms[entry.transform].prototype;
 }
 

@@ -1,4 +1,5 @@
 #include "CachedPageAccess.h"
+#include "ClusterPageDecoder.h"
 #include "NodePages.h"
 
 #include <ff/cache/PageCache.h>
@@ -14,19 +15,37 @@
 #include <string>
 #include <unordered_set>
 
+#include <unistd.h>
+
 namespace ff::runtime {
 
 namespace {
 
-/** The runtime draws format 1; format 2 (`build --format 2`) is read and checked by storage
- *  but not drawn yet (issue 16's next step). Said before any page beyond the index is read. */
-Status drawable(const storage::SceneIndex& scene) {
-    if (scene.formatVersion() == storage::kFormatVersion)
-        return Status::ok();
-    return Status(
-            ErrorCode::Unsupported,
-            "format version " + std::to_string(scene.formatVersion()) +
-                    " is not drawn by this build yet (farfield check verifies it); build the scene with --format 1 to draw it");
+bool isV2(const storage::SceneIndex& scene) {
+    return scene.formatVersion() == storage::kFormatVersion2;
+}
+
+/** Format 2's geometry pages are drawn as the cache's workers decode them, on each prototype's
+ *  position grid. */
+std::shared_ptr<ClusterPageDecoder> clusterDecoder(const storage::SceneIndex& scene) {
+    std::vector<storage::PositionGrid> grids;
+    grids.reserve(scene.prototypesV2().size());
+    for (const storage::PrototypeV2& p : scene.prototypesV2())
+        grids.push_back(p.grid);
+    return std::make_shared<ClusterPageDecoder>(std::move(grids));
+}
+
+/** What a session without --cache-mb keeps of a format 2 file: every page decoded, up to half
+ *  the machine's memory (a file larger than that is drawn as well as that holds). */
+std::uint64_t unbudgetedBytes(const storage::IPageSource& source) {
+    const ClusterPageDecoder sizing({});
+    const std::uint64_t everything =
+            source.pageCount() * std::uint64_t{sizing.maxDecodedBytes(source.pageSize())};
+    const long pages = sysconf(_SC_PHYS_PAGES);
+    const long pageBytes = sysconf(_SC_PAGESIZE);
+    if (pages <= 0 || pageBytes <= 0)
+        return everything;
+    return std::min(everything, static_cast<std::uint64_t>(pages) * static_cast<std::uint64_t>(pageBytes) / 2);
 }
 
 double millisecondsSince(std::chrono::steady_clock::time_point start) {
@@ -86,6 +105,9 @@ struct StreamingSession::Impl {
     const storage::SceneIndex& scene() const { return file ? *file : *streamedIndex; }
     std::shared_ptr<CountingSource> counting;
     std::unique_ptr<cache::PageCache> cache;
+    /** Every frame waits for the pages it lacks (a format 2 file opened without a budget: its
+     *  geometry is decoded by the cache, so it cannot be mapped). */
+    bool completeFrames = false;
     std::unique_ptr<IPageAccess> pages;
     CachedPageAccess* cachedPages = nullptr; ///< pages, when streaming
     std::unique_ptr<BackToFrontTraversal> traversal;
@@ -115,6 +137,12 @@ struct StreamingSession::Impl {
           Finish&& finish);
     /** One frame into `result` (its stats start afresh). */
     Status frameToImage(const FrameContext& context, Frame& result, double& prefetchMs);
+    /** Draws the frame with `draw` again, after waiting for every read it asked for, until it
+     *  lacks no page that fits the budget (`stats`: what `draw` counts into). */
+    template <typename Draw> Status untilComplete(const FrameStats& stats, bool& stalled, Draw&& draw);
+    /** frameToImage() until the frame lacks no page that fits the budget. */
+    Status completeFrameToImage(
+            const FrameContext& context, Frame& result, double& prefetchMs, bool& stalled);
     /** A public frame call: pump, then `body` (one frame or, waiting, several), then the
      *  telemetry of what `stats` ends as. */
     template <typename Body>
@@ -144,7 +172,19 @@ StreamingSession::open(const std::filesystem::path& scenePath, const SessionOpti
     }
     auto impl = std::make_unique<Impl>();
     FF_ASSIGN_OR_RETURN(impl->file, storage::SceneFile::open(scenePath));
-    FF_RETURN_IF_ERROR(drawable(*impl->file));
+    if (isV2(*impl->file)) {
+        impl.reset();
+        FF_ASSIGN_OR_RETURN(
+                std::unique_ptr<cache::ScenePageSource> source,
+                cache::ScenePageSource::open(scenePath));
+        SessionOptions unbudgeted = options;
+        unbudgeted.cacheBytes = unbudgetedBytes(*source);
+        FF_ASSIGN_OR_RETURN(
+                std::unique_ptr<StreamingSession> session,
+                open(std::shared_ptr<storage::IPageSource>(std::move(source)), unbudgeted));
+        session->mImpl->completeFrames = true;
+        return session;
+    }
     impl->pages = std::make_unique<MappedPageAccess>(*impl->file);
     FF_RETURN_IF_ERROR(impl->startDrawing(options));
     return std::unique_ptr<StreamingSession>(new StreamingSession(std::move(impl)));
@@ -153,20 +193,23 @@ StreamingSession::open(const std::filesystem::path& scenePath, const SessionOpti
 Result<std::unique_ptr<StreamingSession>>
 StreamingSession::open(std::shared_ptr<storage::IPageSource> source, const SessionOptions& options) {
     FF_ASSERT(source != nullptr);
-    const auto rootTooLarge = [&] {
+    // The most one page takes resident: as read, or as format 2's decoder keeps it (known
+    // once the index is read). By value: the source moves into the cache below.
+    std::uint64_t pageBytes = source->pageSize();
+    const auto rootTooLarge = [&options, &pageBytes] {
         return Status(
                 ErrorCode::OutOfBudget,
                 "--cache-mb " + std::to_string(options.cacheBytes >> 20) +
-                        " cannot hold the scene's root page (" +
-                        std::to_string(source->pageSize() >> 10) + " KiB)");
+                        " cannot hold the scene's root page as the cache keeps it (" +
+                        std::to_string(pageBytes >> 10) + " KiB)");
     };
-    if (options.cacheBytes < source->pageSize())
+    if (options.cacheBytes < pageBytes)
         return rootTooLarge();
     auto impl = std::make_unique<Impl>();
     // The index before the cache: it is read once, at open, and stays outside the budget.
     FF_ASSIGN_OR_RETURN(impl->streamedIndex, storage::SceneIndex::read(*source));
     const storage::SceneIndex& scene = impl->scene();
-    FF_RETURN_IF_ERROR(drawable(scene));
+    FF_ASSIGN_OR_RETURN(const storage::NodeRef root, detail::sceneRoot(scene));
     impl->counting = std::make_shared<CountingSource>(std::move(source));
     cache::PageCacheOptions cacheOptions;
     cacheOptions.budgetBytes = options.cacheBytes;
@@ -175,8 +218,14 @@ StreamingSession::open(std::shared_ptr<storage::IPageSource> source, const Sessi
     // A frame that needs more than the budget keeps the cut it has instead of reading pages
     // it can only drop (docs/methods.md, "At the budget's edge").
     cacheOptions.readOnlyWhatFits = true;
+    if (isV2(scene)) {
+        cacheOptions.decoder = clusterDecoder(scene);
+        pageBytes = cacheOptions.decoder->maxDecodedBytes(scene.pageSize());
+        if (options.cacheBytes < pageBytes)
+            return rootTooLarge();
+    }
     FF_ASSIGN_OR_RETURN(impl->cache, cache::PageCache::create(impl->counting, cacheOptions));
-    const std::uint64_t rootPage = scene.header().root.page;
+    const std::uint64_t rootPage = root.page;
     impl->cache->request(rootPage, 1e30f);
     impl->cache->drain();
     if (impl->cache->state(rootPage) == cache::PageState::Failed)
@@ -328,8 +377,29 @@ void StreamingSession::Impl::record(
     last = t;
 }
 
+template <typename Draw>
+Status StreamingSession::Impl::untilComplete(const FrameStats& stats, bool& stalled, Draw&& draw) {
+    FF_RETURN_IF_ERROR(draw());
+    while (cache && (stats.nodesDeferred > 0 || stats.pagesMissing > 0)) {
+        const std::uint64_t before = cache->stats().completed;
+        cache->drain();
+        stalled = true;
+        FF_RETURN_IF_ERROR(draw());
+        if (cache->stats().completed == before)
+            break; // nothing more fits the budget: this frame is as good as it gets
+    }
+    return Status::ok();
+}
+
+Status StreamingSession::Impl::completeFrameToImage(
+        const FrameContext& context, Frame& result, double& prefetchMs, bool& stalled) {
+    return untilComplete(result.stats, stalled, [&] { return frameToImage(context, result, prefetchMs); });
+}
+
 Result<Frame> StreamingSession::render(const FrameContext& context) {
     Impl& s = *mImpl;
+    if (s.completeFrames)
+        return renderComplete(context);
     Frame result;
     FF_RETURN_IF_ERROR(s.call(context, result.stats, [&](double& prefetchMs, bool&) {
         return s.frameToImage(context, result, prefetchMs);
@@ -360,13 +430,13 @@ private:
  *  by its geometry pass). */
 class VisibleOnlySink final : public IDrawSink {
 public:
-    VisibleOnlySink(Renderer& renderer, const std::vector<BatchVisibility>& visible)
-        : mRenderer(renderer), mVisible(visible) {}
+    VisibleOnlySink(Renderer& renderer, const std::vector<BatchVisibility>& visible, bool clustered)
+        : mRenderer(renderer), mVisible(visible), mClustered(clustered) {}
     Status draw(const DrawList& batch, FrameStats& stats) override {
         const std::size_t k = mNext++;
         std::uint64_t triangles = 0;
         for (const GeometryDraw& draw : batch.geometry)
-            triangles += draw.triangleCount;
+            triangles += draw.triangles;
         if (k >= mVisible.size() || mVisible[k].triangles.size() != triangles ||
             mVisible[k].cubes.size() != batch.cubes.size())
             return mRenderer.draw(batch, stats);
@@ -375,22 +445,40 @@ public:
         mScratch.localEyes = batch.localEyes;
         mScratch.cubesAsPoints = batch.cubesAsPoints;
         mScratch.cubesOcclude = batch.cubesOcclude;
-        // Each run cut to the stretches of triangles that show (the walk counted them all).
+        // Each run cut to the stretches of its items (triangles, or clusters with a triangle
+        // that shows) that show (the walk counted them all).
         mScratch.geometry.clear();
         std::uint64_t bit = 0;
         for (const GeometryDraw& draw : batch.geometry) {
-            std::uint32_t t = 0;
-            while (t < draw.triangleCount) {
-                for (; t < draw.triangleCount && !shows.triangles[bit + t]; ++t)
-                    ++mTrianglesLeft;
-                const std::uint32_t first = t;
-                for (; t < draw.triangleCount && shows.triangles[bit + t]; ++t) {
-                }
-                if (t > first)
+            mItems.clear();
+            if (!itemTriangles(draw, mItems))
+                return mRenderer.draw(batch, stats);
+            std::uint32_t item = 0;
+            std::uint64_t itemBit = bit;
+            const auto shown = [&](std::uint32_t i, std::uint64_t from) {
+                for (std::uint32_t t = 0; t < mItems[i]; ++t)
+                    if (shows.triangles[from + t])
+                        return true;
+                return false;
+            };
+            while (item < draw.count) {
+                for (; item < draw.count && !shown(item, itemBit); itemBit += mItems[item++])
+                    mTrianglesLeft += mItems[item];
+                const std::uint32_t first = item;
+                std::uint32_t kept = 0;
+                for (; item < draw.count && shown(item, itemBit); itemBit += mItems[item++])
+                    kept += mItems[item];
+                if (item > first)
                     mScratch.geometry.push_back(
-                            {draw.page, draw.payload, draw.firstTriangle + first, t - first, draw.transform});
+                            {draw.page,
+                             draw.payload,
+                             draw.first + first,
+                             item - first,
+                             draw.transform,
+                             kept,
+                             draw.payloadBytes});
             }
-            bit += draw.triangleCount;
+            bit += draw.triangles;
         }
         mDrawsLeft += static_cast<std::int64_t>(batch.geometry.size()) - static_cast<std::int64_t>(mScratch.geometry.size());
         mScratch.cubes.clear();
@@ -415,8 +503,24 @@ public:
     }
 
 private:
+    /** The triangles of each of the draw's items (false: a page that does not view). */
+    bool itemTriangles(const GeometryDraw& draw, std::vector<std::uint32_t>& out) const {
+        if (!mClustered) {
+            out.assign(draw.count, 1);
+            return true;
+        }
+        const Result<DecodedClusterPage> page = DecodedClusterPage::view({draw.payload, draw.payloadBytes});
+        if (!page || std::uint64_t{draw.first} + draw.count > page->clusters().size())
+            return false;
+        for (std::uint32_t c = draw.first; c < draw.first + draw.count; ++c)
+            out.push_back(page->clusters()[c].info.triangleCount);
+        return true;
+    }
+
     Renderer& mRenderer;
     const std::vector<BatchVisibility>& mVisible;
+    const bool mClustered;
+    std::vector<std::uint32_t> mItems;
     std::size_t mNext = 0;
     DrawList mScratch;
     std::uint64_t mTrianglesLeft = 0, mCubesLeft = 0, mFacesLeft = 0;
@@ -427,7 +531,7 @@ private:
 
 Result<Frame> StreamingSession::renderOracle(const FrameContext& context) {
     Impl& s = *mImpl;
-    if (s.cache)
+    if (s.cache && !s.completeFrames)
         return Status(ErrorCode::InvalidArgument, "the occlusion oracle needs every page mapped (no --cache-mb)");
     FrameContext plain = context;
     plain.occlusion.enabled = false;
@@ -438,13 +542,14 @@ Result<Frame> StreamingSession::renderOracle(const FrameContext& context) {
         s.sinkOverride = &keeping;
         Frame first;
         double prefetchMs = 0.0;
-        const Status drawn = s.frameToImage(plain, first, prefetchMs);
+        bool stalled = false;
+        const Status drawn = s.completeFrameToImage(plain, first, prefetchMs, stalled);
         s.sinkOverride = nullptr;
         FF_RETURN_IF_ERROR(drawn);
         for (const DrawList& batch : keeping.batches)
             visible.push_back(s.renderer->visibleParts(batch));
     }
-    VisibleOnlySink visibleOnly(*s.renderer, visible);
+    VisibleOnlySink visibleOnly(*s.renderer, visible, isV2(s.scene()));
     Frame result;
     s.sinkOverride = &visibleOnly;
     const Status drawn = s.call(plain, result.stats, [&](double& prefetchMs, bool&) {
@@ -460,29 +565,23 @@ Result<Frame> StreamingSession::renderOracle(const FrameContext& context) {
 Result<Frame> StreamingSession::renderComplete(const FrameContext& context) {
     Impl& s = *mImpl;
     Frame result;
-    FF_RETURN_IF_ERROR(
-            s.call(context, result.stats, [&](double& prefetchMs, bool& stalled) -> Status {
-                FF_RETURN_IF_ERROR(s.frameToImage(context, result, prefetchMs));
-                while (s.cache && result.stats.nodesDeferred > 0) {
-                    const std::uint64_t before = s.cache->stats().completed;
-                    s.cache->drain();
-                    stalled = true;
-                    FF_RETURN_IF_ERROR(s.frameToImage(context, result, prefetchMs));
-                    if (s.cache->stats().completed == before)
-                        break; // nothing more fits the budget: this frame is as good as it gets
-                }
-                return Status::ok();
-            }));
+    FF_RETURN_IF_ERROR(s.call(context, result.stats, [&](double& prefetchMs, bool& stalled) {
+        return s.completeFrameToImage(context, result, prefetchMs, stalled);
+    }));
     return result;
 }
 
 Result<FrameStats> StreamingSession::present(const FrameContext& context) {
     Impl& s = *mImpl;
     FrameStats stats;
-    FF_RETURN_IF_ERROR(s.call(context, stats, [&](double& prefetchMs, bool&) {
-        return s.frame(context, FrameOutput::Window, stats, prefetchMs, [&] {
-            return s.renderer->finishPresent(stats);
-        });
+    FF_RETURN_IF_ERROR(s.call(context, stats, [&](double& prefetchMs, bool& stalled) -> Status {
+        const auto present = [&] {
+            stats = {};
+            return s.frame(context, FrameOutput::Window, stats, prefetchMs, [&] {
+                return s.renderer->finishPresent(stats);
+            });
+        };
+        return s.completeFrames ? s.untilComplete(stats, stalled, present) : present();
     }));
     return stats;
 }

@@ -227,9 +227,9 @@ std::map<std::tuple<std::uint64_t, std::uint32_t, float>, std::uint64_t>
 trianglesDrawn(const test::RecordingSink& s) {
     std::map<std::tuple<std::uint64_t, std::uint32_t, float>, std::uint64_t> out;
     for (const test::RecordedRun& r : s.runs)
-        for (std::uint32_t t = 0; t < r.run.triangleCount; ++t)
+        for (std::uint32_t t = 0; t < r.run.count; ++t)
             ++out[{r.run.page,
-                   r.run.firstTriangle + t,
+                   r.run.first + t,
                    r.transform[3][0] + 3.0f * r.transform[0][0]}];
     return out;
 }

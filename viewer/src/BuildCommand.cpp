@@ -211,8 +211,8 @@ CommandRunner addBuildCommand(CLI::App& app) {
             ->check(CLI::IsMember({"compact", "raw"}))
             ->capture_default_str();
     cmd->add_option("--format", args->format,
-                    "Scene file format: 1 (drawn by render/replay/view) or 2 (compact clusters and 48-byte records, "
-                    "storage/FORMAT.md; verified by check, not drawn yet)")
+                    "Scene file format: 1 or 2 (compact clusters and 48-byte records, storage/FORMAT.md; drawn "
+                    "through the page cache, which decodes its clusters)")
             ->check(CLI::IsMember({1u, 2u}))
             ->capture_default_str();
     cmd->add_option("--cluster-leaf-triangles", args->clusterLeafTriangles,

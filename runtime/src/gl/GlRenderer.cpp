@@ -1,5 +1,6 @@
 #include <ff/runtime/Renderer.h>
 
+#include "../ClusterPageDecoder.h"
 #include "GlHeaders.h"
 #include "OcclusionQueries.h"
 #include "PyramidTests.h"
@@ -31,6 +32,15 @@ struct IndirectCommand {
     GLuint count;
     GLuint instanceCount;
     GLuint first;
+    GLuint baseInstance;
+};
+
+/** A cluster's draw (format 2): u8 indices from byte `firstIndex` of the arena. */
+struct IndexedCommand {
+    GLuint count;
+    GLuint instanceCount;
+    GLuint firstIndex;
+    GLint baseVertex;
     GLuint baseInstance;
 };
 
@@ -88,7 +98,10 @@ struct Renderer::Impl {
     GLsizeiptr visibleBitsCap = 0;
     GLuint geometryVao = 0;
     GLuint cubeVao = 0;
-    // The page arena: one slot per resident geometry page.
+    // The page arena: one slot per resident geometry page. Format 1: the page's triangle slots.
+    // Format 2 (clustered): the decoded page's vertices, then its u8 cluster-local indices, the
+    // same buffer bound as the element array.
+    bool clustered = false;
     GLuint arena = 0;
     GLsizeiptr slotBytes = 0;
     GLuint verticesPerSlot = 0;
@@ -121,6 +134,7 @@ struct Renderer::Impl {
     GLuint iota = 0;
     GLsizeiptr iotaCap = 0;
     std::vector<IndirectCommand> commands;
+    std::vector<IndexedCommand> indexedCommands;
     std::vector<glm::mat4> normalScratch;
     std::vector<glm::vec4> eyeScratch;
     // Render target.
@@ -147,6 +161,11 @@ struct Renderer::Impl {
     void uploadTransforms(const DrawList& list);
     Result<std::uint32_t> residentSlot(const GeometryDraw& draw, FrameStats& stats);
     void growArena();
+    /** Binds the arena as the geometry's vertex (and, clustered, element) buffer. */
+    void bindArena();
+    /** The indexed commands drawing `draw`'s clusters from `slot` (false: a page that does not
+     *  view as a decoded cluster page, which NodePages already refused to hand out). */
+    bool appendClusterCommands(const GeometryDraw& draw, std::uint32_t slot);
     void drawBatch(const glm::mat4& viewProjection);
     Status drawGeometry(const DrawList& list, const glm::mat4& viewProjection, FrameStats& stats);
     void drawCubes(const DrawList& list, const glm::mat4& viewProjection, float pixelScale);
@@ -198,14 +217,26 @@ Result<std::unique_ptr<Renderer>> Renderer::create(const storage::SceneIndex& sc
     FF_ASSIGN_OR_RETURN(impl->cubePointOccluderProgram, linkGlProgram({gl::kCubeShaderInputs, gl::kCubePointVertexShader},
                                                                       gl::kCubeOccluderFragmentShader));
 
-    // Slots hold a page's triangles without its trailer, so vertex offsets stay whole vertices.
-    const std::uint32_t trianglesPerPage = storage::trianglesPerPage(scene.pageSize());
-    impl->slotBytes = static_cast<GLsizeiptr>(trianglesPerPage * sizeof(storage::PackedTriangle));
-    impl->verticesPerSlot = trianglesPerPage * 3;
+    // Slots hold a page's triangles without its trailer, so vertex offsets stay whole vertices;
+    // a decoded cluster page's vertices and indices, rounded up to whole vertices.
+    impl->clustered = scene.formatVersion() == storage::kFormatVersion2;
+    if (impl->clustered) {
+        constexpr std::uint64_t vertex = sizeof(storage::PackedVertex);
+        const std::uint64_t decoded = storage::maxDecodedClusterBytes(scene.pageSize());
+        impl->slotBytes = static_cast<GLsizeiptr>((decoded + vertex - 1) / vertex * vertex);
+        impl->verticesPerSlot = static_cast<GLuint>(static_cast<std::uint64_t>(impl->slotBytes) / vertex);
+    } else {
+        const std::uint32_t trianglesPerPage = storage::trianglesPerPage(scene.pageSize());
+        impl->slotBytes = static_cast<GLsizeiptr>(trianglesPerPage * sizeof(storage::PackedTriangle));
+        impl->verticesPerSlot = trianglesPerPage * 3;
+    }
     // The arena starts small and doubles up to the budget: on llvmpipe GPU buffers are system
-    // memory, and a budget is a ceiling, not an amount to take up front.
+    // memory, and a budget is a ceiling, not an amount to take up front. Clustered draws address
+    // the arena's bytes with 32-bit index offsets: it stays below 2 GiB.
+    const std::uint64_t arenaBytes =
+            impl->clustered ? std::min<std::uint64_t>(options.gpuBudgetBytes, 1ull << 31) : options.gpuBudgetBytes;
     impl->maxSlots = static_cast<std::uint32_t>(
-            std::clamp<std::uint64_t>(options.gpuBudgetBytes / static_cast<std::uint64_t>(impl->slotBytes), 1, 1u << 20));
+            std::clamp<std::uint64_t>(arenaBytes / static_cast<std::uint64_t>(impl->slotBytes), 1, 1u << 20));
     impl->slotCount = std::min<std::uint32_t>(impl->maxSlots, 64);
     impl->pageOfSlot.assign(impl->slotCount, 0);
     impl->slotBatch.assign(impl->slotCount, 0);
@@ -229,8 +260,8 @@ Result<std::unique_ptr<Renderer>> Renderer::create(const storage::SceneIndex& sc
 
     // Geometry: PackedVertex layout (20 bytes) straight from the pages.
     glGenVertexArrays(1, &impl->geometryVao);
+    impl->bindArena();
     glBindVertexArray(impl->geometryVao);
-    glBindVertexBuffer(0, impl->arena, 0, sizeof(storage::PackedVertex));
     glVertexAttribFormat(0, 3, GL_FLOAT, GL_FALSE, offsetof(storage::PackedVertex, position));
     // As integers: the shader tells the unlit code (-32768, -32768) apart from -32767, which a
     // normalized attribute maps to the same -1.
@@ -288,7 +319,10 @@ Status Renderer::Impl::warmPrograms() {
     list.localEyes.push_back(glm::vec3(0.0f));
     uploadTransforms(list);
     // The arena's first triangle, whatever it holds (no page is resident yet).
-    commands.push_back({3, 1, 0, 0});
+    if (clustered)
+        indexedCommands.push_back({3, 1, 0, 0, 0});
+    else
+        commands.push_back({3, 1, 0, 0});
     drawBatch(identity);
     list.cubes.push_back({glm::vec3(-0.5f), glm::vec3(0.5f), 0, {}});
     ensureOpacityTexture();
@@ -358,9 +392,7 @@ void Renderer::Impl::growArena() {
     glCopyBufferSubData(GL_COPY_READ_BUFFER, GL_COPY_WRITE_BUFFER, 0, 0, slotBytes * slotCount);
     glDeleteBuffers(1, &arena);
     arena = bigger;
-    glBindVertexArray(geometryVao);
-    glBindVertexBuffer(0, arena, 0, sizeof(storage::PackedVertex));
-    glBindVertexArray(0);
+    bindArena();
     pageOfSlot.resize(grown, 0);
     slotBatch.resize(grown, 0);
     for (std::uint32_t s = grown; s-- > slotCount;)
@@ -387,20 +419,64 @@ Result<std::uint32_t> Renderer::Impl::residentSlot(const GeometryDraw& draw, Fra
     // The draw carries the page's bytes, valid for the frame (the traversal found it Ready).
     const std::uint32_t slot = freeSlots.back();
     freeSlots.pop_back();
-    bufferSubData(arena, static_cast<GLintptr>(slot) * slotBytes, slotBytes, draw.payload);
+    const GLintptr base = static_cast<GLintptr>(slot) * slotBytes;
+    if (clustered) {
+        const Result<DecodedClusterPage> decoded =
+                DecodedClusterPage::view({draw.payload, draw.payloadBytes});
+        if (!decoded) {
+            freeSlots.push_back(slot);
+            return decoded.status();
+        }
+        const auto vertexBytes = static_cast<GLsizeiptr>(decoded->vertices().size_bytes());
+        bufferSubData(arena, base, vertexBytes, decoded->vertices().data());
+        bufferSubData(arena, base + vertexBytes, static_cast<GLsizeiptr>(decoded->indices().size()),
+                      decoded->indices().data());
+    } else {
+        bufferSubData(arena, base, slotBytes, draw.payload);
+    }
     slotOfPage[page] = slot;
     pageOfSlot[slot] = page;
     ++stats.pagesUploaded;
     return slot;
 }
 
+void Renderer::Impl::bindArena() {
+    glBindVertexArray(geometryVao);
+    glBindVertexBuffer(0, arena, 0, sizeof(storage::PackedVertex));
+    if (clustered)
+        glBindBuffer(GL_ELEMENT_ARRAY_BUFFER, arena); // VAO state
+    glBindVertexArray(0);
+}
+
+bool Renderer::Impl::appendClusterCommands(const GeometryDraw& draw, std::uint32_t slot) {
+    const Result<DecodedClusterPage> page = DecodedClusterPage::view({draw.payload, draw.payloadBytes});
+    if (!page || std::uint64_t{draw.first} + draw.count > page->clusters().size())
+        return false;
+    const std::uint64_t base = std::uint64_t{slot} * static_cast<std::uint64_t>(slotBytes);
+    const std::uint64_t indices = base + page->vertices().size_bytes();
+    for (std::uint32_t c = draw.first; c < draw.first + draw.count; ++c) {
+        const storage::IndexedCluster& cluster = page->clusters()[c];
+        indexedCommands.push_back(
+                {cluster.info.triangleCount * 3,
+                 1,
+                 static_cast<GLuint>(indices + cluster.firstIndex),
+                 static_cast<GLint>(slot * verticesPerSlot + cluster.firstVertex),
+                 draw.transform});
+    }
+    return true;
+}
+
 void Renderer::Impl::drawBatch(const glm::mat4& viewProjection) {
-    if (commands.empty())
+    if (commands.empty() && indexedCommands.empty())
         return;
-    const auto bytes = static_cast<GLsizeiptr>(commands.size() * sizeof(IndirectCommand));
+    const auto bytes = clustered ? static_cast<GLsizeiptr>(indexedCommands.size() * sizeof(IndexedCommand))
+                                 : static_cast<GLsizeiptr>(commands.size() * sizeof(IndirectCommand));
     BatchBuffers& set = current();
     ensureCapacity(set.indirect, set.indirectCap, bytes);
-    bufferSubData(set.indirect, 0, bytes, commands.data());
+    if (clustered)
+        bufferSubData(set.indirect, 0, bytes, indexedCommands.data());
+    else
+        bufferSubData(set.indirect, 0, bytes, commands.data());
     glUseProgram(geometryProgram);
     glUniformMatrix4fv(glGetUniformLocation(geometryProgram, "uViewProjection"), 1, GL_FALSE, glm::value_ptr(viewProjection));
     glUniform3f(glGetUniformLocation(geometryProgram, "uLightDirection"), storage::kLightDirection[0],
@@ -409,8 +485,12 @@ void Renderer::Impl::drawBatch(const glm::mat4& viewProjection) {
     glUniform1f(glGetUniformLocation(geometryProgram, "uDiffuse"), storage::kDiffuse);
     glBindVertexArray(geometryVao);
     glBindBuffer(GL_DRAW_INDIRECT_BUFFER, set.indirect);
-    glMultiDrawArraysIndirect(GL_TRIANGLES, nullptr, static_cast<GLsizei>(commands.size()), 0);
+    if (clustered)
+        glMultiDrawElementsIndirect(GL_TRIANGLES, GL_UNSIGNED_BYTE, nullptr, static_cast<GLsizei>(indexedCommands.size()), 0);
+    else
+        glMultiDrawArraysIndirect(GL_TRIANGLES, nullptr, static_cast<GLsizei>(commands.size()), 0);
     commands.clear();
+    indexedCommands.clear();
     ++batch;
 }
 
@@ -426,7 +506,10 @@ Status Renderer::Impl::drawGeometry(const DrawList& list, const glm::mat4& viewP
             return slot.status();
         slotBatch[*slot] = batch;
         lru.touch(draw.page);
-        commands.push_back({draw.triangleCount * 3, 1, *slot * verticesPerSlot + draw.firstTriangle * 3, draw.transform});
+        if (!clustered)
+            commands.push_back({draw.count * 3, 1, *slot * verticesPerSlot + draw.first * 3, draw.transform});
+        else if (!appendClusterCommands(draw, *slot))
+            return Status(ErrorCode::Corrupt, "page " + std::to_string(draw.page) + ": not a decoded cluster page");
     }
     drawBatch(viewProjection);
     return Status::ok();
@@ -575,7 +658,7 @@ BatchVisibility Renderer::visibleParts(const DrawList& batch) {
     BatchVisibility visible;
     std::uint64_t triangles = 0;
     for (const GeometryDraw& draw : batch.geometry)
-        triangles += draw.triangleCount;
+        triangles += draw.triangles;
     visible.triangles.assign(triangles, true);
     visible.cubes.assign(batch.cubes.size(), true);
     if (!s.visibleTriangleProgram) {
@@ -620,17 +703,34 @@ BatchVisibility Renderer::visibleParts(const DrawList& batch) {
     for (std::size_t i = 0; i < batch.geometry.size(); ++i) {
         const GeometryDraw& draw = batch.geometry[i];
         const auto slot = s.slotOfPage.find(draw.page);
-        if (slot != s.slotOfPage.end()) {
+        if (slot != s.slotOfPage.end() && !s.clustered) {
             resident[i] = true;
             glUniform1ui(firstBit, static_cast<GLuint>(bit));
             glDrawArraysInstancedBaseInstance(
                     GL_TRIANGLES,
-                    static_cast<GLint>(slot->second * s.verticesPerSlot + draw.firstTriangle * 3),
-                    static_cast<GLsizei>(draw.triangleCount * 3),
+                    static_cast<GLint>(slot->second * s.verticesPerSlot + draw.first * 3),
+                    static_cast<GLsizei>(draw.count * 3),
                     1,
                     draw.transform);
+        } else if (slot != s.slotOfPage.end() && s.appendClusterCommands(draw, slot->second)) {
+            // A draw per cluster: gl_PrimitiveID counts from 0 in each.
+            resident[i] = true;
+            GLuint clusterBit = static_cast<GLuint>(bit);
+            for (const IndexedCommand& c : s.indexedCommands) {
+                glUniform1ui(firstBit, clusterBit);
+                glDrawElementsInstancedBaseVertexBaseInstance(
+                        GL_TRIANGLES,
+                        static_cast<GLsizei>(c.count),
+                        GL_UNSIGNED_BYTE,
+                        reinterpret_cast<const void*>(static_cast<std::uintptr_t>(c.firstIndex)),
+                        1,
+                        c.baseVertex,
+                        c.baseInstance);
+                clusterBit += c.count / 3;
+            }
+            s.indexedCommands.clear();
         }
-        bit += draw.triangleCount;
+        bit += draw.triangles;
     }
     if (!batch.cubes.empty()) {
         const GLuint program = batch.cubesAsPoints ? s.visibleCubePointProgram : s.visibleCubeProgram;
@@ -645,7 +745,7 @@ BatchVisibility Renderer::visibleParts(const DrawList& batch) {
     const auto isSet = [&](std::uint64_t b) { return (shown[b >> 5] >> (b & 31u)) & 1u; };
     bit = 0;
     for (std::size_t i = 0; i < batch.geometry.size(); ++i) {
-        for (std::uint32_t t = 0; t < batch.geometry[i].triangleCount; ++t, ++bit)
+        for (std::uint32_t t = 0; t < batch.geometry[i].triangles; ++t, ++bit)
             visible.triangles[bit] = !resident[i] || isSet(bit);
     }
     for (std::size_t c = 0; c < batch.cubes.size(); ++c)

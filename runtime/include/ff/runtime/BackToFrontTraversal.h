@@ -77,8 +77,7 @@ private:
     Status walk(Pass pass, FrameStats& stats);
     void
     visit(const storage::NodeRecord& node, storage::NodeRef ref, std::size_t active, int depth);
-    void emitGeometry(
-            const storage::GeometrySegment& segment, const std::byte* payload, std::size_t active);
+    void emitGeometry(const detail::PayloadRun& run, std::size_t active);
     void emitCube(const storage::NodeRecord& node, storage::NodeRef ref, std::size_t active);
     void defer(const storage::NodeRecord& node, storage::NodeRef ref, std::size_t active);
     void pushActive(const glm::mat4& transform, std::uint64_t instancePath);
@@ -106,7 +105,7 @@ private:
     std::vector<ChildEntry> mChildStack;
     std::vector<detail::PayloadRun> mRuns; ///< a cell's own geometry runs
     /** Full method: every geometry run of each prototype, merged per page (built on demand). */
-    std::vector<std::vector<storage::GeometrySegment>> mPrototypeGeometry;
+    std::vector<std::vector<detail::PayloadRun>> mPrototypeGeometry;
     std::vector<bool> mPrototypeGeometryReady;
 };
 

@@ -9,14 +9,18 @@
 
 namespace ff::runtime {
 
-/** A run of triangles inside one Geometry page, drawn with transforms[transform]. Carries the
- *  page's bytes, so the renderer uploads what it is given and looks nothing up again. */
+/** A run of one Geometry page's items, drawn with transforms[transform]: triangle slots of a
+ *  format 1 page (PackedTriangle), or whole clusters of a format 2 page as the cache decoded it
+ *  (runtime/src/ClusterPageDecoder.h). Carries the page's bytes, so the renderer uploads what it
+ *  is given and looks nothing up again. */
 struct GeometryDraw {
-    std::uint64_t page;           ///< the GPU arena's key
-    const std::byte* payload;     ///< the page's payload (PackedTriangle slots), valid this frame
-    std::uint32_t firstTriangle;
-    std::uint32_t triangleCount;
+    std::uint64_t page;       ///< the GPU arena's key
+    const std::byte* payload; ///< the page's payload as resident, valid this frame
+    std::uint32_t first;      ///< first triangle slot (format 1) or cluster (format 2)
+    std::uint32_t count;      ///< triangle slots or clusters
     std::uint32_t transform;
+    std::uint32_t triangles;    ///< the triangles the run draws (format 1: `count`)
+    std::uint32_t payloadBytes; ///< the bytes `payload` spans
 };
 
 /** A color cube: a box in its transform's frame with six premultiplied RGBA8 faces. */
