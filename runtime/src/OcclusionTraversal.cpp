@@ -983,7 +983,11 @@ std::uint64_t OcclusionTraversal::Impl::estimatedTriangles(const Entry& entry) c
             whole > 0.0 ? std::min(1.0, boxArea(toVec3(entry.record.boundsMin), toVec3(entry.record.boundsMax)) / whole)
                         : 1.0;
     const auto byArea = static_cast<std::uint64_t>(share * static_cast<double>(prototype->triangleCount));
-    return std::max({byLevel, byArea, static_cast<std::uint64_t>(entry.record.geometryCount)});
+    // Format 2's geometryCount counts representations, not triangles (NodePages).
+    const std::uint64_t own = nodePages.scene().formatVersion() == storage::kFormatVersion2
+                                      ? 0
+                                      : static_cast<std::uint64_t>(entry.record.geometryCount);
+    return std::max({byLevel, byArea, own});
 }
 
 bool OcclusionTraversal::Impl::worthTesting(const Entry& entry) const {

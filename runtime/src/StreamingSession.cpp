@@ -380,7 +380,8 @@ void StreamingSession::Impl::record(
 template <typename Draw>
 Status StreamingSession::Impl::untilComplete(const FrameStats& stats, bool& stalled, Draw&& draw) {
     FF_RETURN_IF_ERROR(draw());
-    while (cache && (stats.nodesDeferred > 0 || stats.pagesMissing > 0)) {
+    // A complete frame also lacks no page: --method full defers nothing, it leaves pages out.
+    while (cache && (stats.nodesDeferred > 0 || (completeFrames && stats.pagesMissing > 0))) {
         const std::uint64_t before = cache->stats().completed;
         cache->drain();
         stalled = true;
@@ -543,7 +544,11 @@ Result<Frame> StreamingSession::renderOracle(const FrameContext& context) {
         Frame first;
         double prefetchMs = 0.0;
         bool stalled = false;
-        const Status drawn = s.completeFrameToImage(plain, first, prefetchMs, stalled);
+        // Only the last try's batches: the ones before lacked pages (and their bytes may be gone).
+        const Status drawn = s.untilComplete(first.stats, stalled, [&] {
+            keeping.batches.clear();
+            return s.frameToImage(plain, first, prefetchMs);
+        });
         s.sinkOverride = nullptr;
         FF_RETURN_IF_ERROR(drawn);
         for (const DrawList& batch : keeping.batches)

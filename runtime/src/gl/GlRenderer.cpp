@@ -164,7 +164,8 @@ struct Renderer::Impl {
     /** Binds the arena as the geometry's vertex (and, clustered, element) buffer. */
     void bindArena();
     /** The indexed commands drawing `draw`'s clusters from `slot` (false: a page that does not
-     *  view as a decoded cluster page, which NodePages already refused to hand out). */
+     *  view as a decoded cluster page, or clusters past its table, which NodePages already
+     *  refused to hand out). */
     bool appendClusterCommands(const GeometryDraw& draw, std::uint32_t slot);
     void drawBatch(const glm::mat4& viewProjection);
     Status drawGeometry(const DrawList& list, const glm::mat4& viewProjection, FrameStats& stats);
@@ -423,9 +424,11 @@ Result<std::uint32_t> Renderer::Impl::residentSlot(const GeometryDraw& draw, Fra
     if (clustered) {
         const Result<DecodedClusterPage> decoded =
                 DecodedClusterPage::view({draw.payload, draw.payloadBytes});
-        if (!decoded) {
+        if (!decoded || decoded->vertices().size_bytes() + decoded->indices().size() >
+                                static_cast<std::uint64_t>(slotBytes)) {
             freeSlots.push_back(slot);
-            return decoded.status();
+            return decoded ? Status(ErrorCode::Corrupt, "page " + std::to_string(page) + ": decodes past its slot")
+                           : decoded.status();
         }
         const auto vertexBytes = static_cast<GLsizeiptr>(decoded->vertices().size_bytes());
         bufferSubData(arena, base, vertexBytes, decoded->vertices().data());
@@ -502,14 +505,19 @@ Status Renderer::Impl::drawGeometry(const DrawList& list, const glm::mat4& viewP
             drawBatch(viewProjection); // frees this batch's pins
             slot = residentSlot(draw, stats);
         }
-        if (!slot)
+        if (!slot) {
+            commands.clear();
+            indexedCommands.clear();
             return slot.status();
+        }
         slotBatch[*slot] = batch;
         lru.touch(draw.page);
         if (!clustered)
             commands.push_back({draw.count * 3, 1, *slot * verticesPerSlot + draw.first * 3, draw.transform});
-        else if (!appendClusterCommands(draw, *slot))
+        else if (!appendClusterCommands(draw, *slot)) {
+            indexedCommands.clear();
             return Status(ErrorCode::Corrupt, "page " + std::to_string(draw.page) + ": not a decoded cluster page");
+        }
     }
     drawBatch(viewProjection);
     return Status::ok();

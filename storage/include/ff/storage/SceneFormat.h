@@ -9,8 +9,8 @@
 //      16-byte trailer with XXH3-64 checksum on every page.
 //   2  compact: 48-byte node records addressed by node index through a NodePages section, each
 //      node's representations in its Nodes page, geometry pages of clusters (ClusterPage.h),
-//      64-byte prototype records with the position grid. Written by `build --format 2`; the
-//      runtime does not draw it yet (storage reads and checks it).
+//      64-byte prototype records with the position grid. Written by `build --format 2`;
+//      storage reads and checks it, the runtime draws it.
 
 #include <array>
 #include <cstddef>
