@@ -130,6 +130,18 @@ runtime::Image decodeImage(const fs::path& path) {
     return std::move(image).value();
 }
 
+runtime::Image renderToImage(
+        const fs::path& scene, const fs::path& png, const std::vector<std::string>& args, const fs::path& scratch) {
+    std::vector<std::string> command = {"render", scene.string(), "-o", png.string()};
+    command.insert(command.end(), args.begin(), args.end());
+    const ProcessResult rendered = runFarfield(command, scratch);
+    if (!rendered.exited || rendered.exitCode != 0) {
+        ADD_FAILURE() << rendered.describe();
+        return {};
+    }
+    return decodeImage(png);
+}
+
 std::uint64_t coveredPixels(const runtime::Image& image) {
     std::uint64_t covered = 0;
     for (std::size_t i = 3; i < image.rgba.size(); i += 4)

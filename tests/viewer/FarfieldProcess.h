@@ -49,6 +49,13 @@ nlohmann::json readJsonFile(const std::filesystem::path& path);
 /** Decodes an image written by `farfield render` (through the viewer's OIIO plugin). */
 runtime::Image decodeImage(const std::filesystem::path& path);
 
+/** `farfield render SCENE -o PNG ARGS...` and the image it wrote. A render that fails fails the
+ *  test (ADD_FAILURE) and gives an empty image. */
+runtime::Image renderToImage(
+        const std::filesystem::path& scene,
+        const std::filesystem::path& png,
+        const std::vector<std::string>& args,
+        const std::filesystem::path& scratch);
 /** Pixels with alpha > 0 (needs an image rendered with --coverage-alpha). */
 std::uint64_t coveredPixels(const runtime::Image& image);
 

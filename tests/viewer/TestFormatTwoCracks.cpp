@@ -69,19 +69,11 @@ TEST_P(FormatTwoCrackTest, NoBackgroundShowsBetweenClusters) {
             const fs::path png =
                     dir / ("view" + std::to_string(v) + "_" + std::to_string(format) + ".png");
             std::vector<std::string> args = {
-                    "render",
-                    (dir / ("scene" + std::to_string(format) + ".ffs")).string(),
-                    "-o",
-                    png.string(),
-                    "--size",
-                    "480x360",
-                    "--epsilon",
-                    "0",
-                    "--coverage-alpha"};
+                    "--size", "480x360", "--epsilon", "0", "--coverage-alpha"};
             args.insert(args.end(), views[v].begin(), views[v].end());
-            const ProcessResult rendered = runFarfield(args, dir);
-            ASSERT_TRUE(rendered.exited && rendered.exitCode == 0) << rendered.describe();
-            images[format - 1] = decodeImage(png);
+            images[format - 1] = renderToImage(
+                    dir / ("scene" + std::to_string(format) + ".ffs"), png, args, dir);
+            ASSERT_EQ(images[format - 1].width, 480);
         }
         surface += coveredPixels(images[0]);
         EXPECT_EQ(crackPixels(images[1], images[0]), 0u) << "view " << v;

@@ -165,21 +165,10 @@ TEST_P(SharedModelTest, EpsilonZeroRendersExactlyLikeFullInBothFormats) {
             for (int m = 0; m < 2; ++m) {
                 const fs::path png =
                         dir / (std::string(view.name) + std::to_string(format) + std::to_string(m) + ".png");
-                std::vector<std::string> args = {
-                        "render",
-                        (dir / ("scene" + std::to_string(format) + ".ffs")).string(),
-                        "-o",
-                        png.string(),
-                        "--size",
-                        "160x120",
-                        "--coverage-alpha",
-                        methods[m][0],
-                        methods[m][1]};
+                std::vector<std::string> args = {"--size", "160x120", "--coverage-alpha", methods[m][0], methods[m][1]};
                 args.insert(args.end(), view.flags.begin(), view.flags.end());
-                const ProcessResult rendered = runFarfield(args, dir);
-                ASSERT_TRUE(rendered.exited && rendered.exitCode == 0) << rendered.describe();
                 runtime::Image& image = images[format - 1][m];
-                image = decodeImage(png);
+                image = renderToImage(dir / ("scene" + std::to_string(format) + ".ffs"), png, args, dir);
                 ASSERT_EQ(image.width, 160);
                 ASSERT_EQ(image.height, 120);
             }
@@ -196,21 +185,10 @@ TEST_P(SharedModelTest, EpsilonZeroRendersExactlyLikeFullInBothFormats) {
         runtime::Image supersampled[2];
         for (int format = 1; format <= 2; ++format) {
             const fs::path png = dir / (std::string(view.name) + std::to_string(format) + "ss.png");
-            std::vector<std::string> args = {
-                    "render",
-                    (dir / ("scene" + std::to_string(format) + ".ffs")).string(),
-                    "-o",
-                    png.string(),
-                    "--size",
-                    "320x240",
-                    "--supersample",
-                    "2",
-                    "--epsilon",
-                    "0"};
+            std::vector<std::string> args = {"--size", "320x240", "--supersample", "2", "--epsilon", "0"};
             args.insert(args.end(), view.flags.begin(), view.flags.end());
-            const ProcessResult rendered = runFarfield(args, dir);
-            ASSERT_TRUE(rendered.exited && rendered.exitCode == 0) << rendered.describe();
-            supersampled[format - 1] = decodeImage(png);
+            supersampled[format - 1] = renderToImage(dir / ("scene" + std::to_string(format) + ".ffs"), png, args, dir);
+            ASSERT_EQ(supersampled[format - 1].width, 320);
         }
         const Result<runtime::ColorError> error = runtime::colorError(supersampled[1], supersampled[0]);
         ASSERT_TRUE(error.isOk()) << error.status().message();
