@@ -38,8 +38,10 @@
 namespace ff::runtime {
 
 struct SessionOptions {
-    /** Hard budget for resident page bytes. 0: no cache, every page through the scene file's
-     *  memory map (synchronous: every frame is complete). */
+    /** Hard budget for resident page bytes (format 2: as decoded). 0: no cache, every page
+     *  through the scene file's memory map (synchronous: every frame is complete); a format 2
+     *  file, whose geometry must be decoded, streams through a cache of every page decoded (at
+     *  most half the machine's memory) and every frame waits for the pages it lacks. */
     std::uint64_t cacheBytes = 0;
     /** Background read threads (streaming). */
     unsigned ioThreads = 2;
