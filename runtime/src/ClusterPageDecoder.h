@@ -51,6 +51,20 @@ public:
     std::span<const storage::PackedVertex> vertices() const noexcept { return mVertices; }
     std::span<const std::uint8_t> indices() const noexcept { return mIndices; }
 
+    /** Clusters [first, first + count) of the page; empty when they run past its table. */
+    std::span<const storage::IndexedCluster> clusters(std::uint32_t first, std::uint32_t count) const noexcept {
+        if (std::uint64_t{first} + count > mClusters.size())
+            return {};
+        return mClusters.subspan(first, count);
+    }
+    /** The clusters a draw names (GeometryDraw's payload, first, count): empty when the payload
+     *  is not a decoded cluster page or they run past its table. */
+    static std::span<const storage::IndexedCluster>
+    clustersOf(std::span<const std::byte> payload, std::uint32_t first, std::uint32_t count) {
+        const Result<DecodedClusterPage> page = view(payload);
+        return page ? page->clusters(first, count) : std::span<const storage::IndexedCluster>{};
+    }
+
     /** The clusters of a node's payload (its representation's offset, length, count). */
     [[nodiscard]] Result<storage::ClusterRun>
     run(std::uint32_t offset, std::uint32_t length, std::uint32_t count) const {

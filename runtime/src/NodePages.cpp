@@ -231,7 +231,7 @@ Fetch NodePages::readTop(
         float priority,
         storage::NodeRecord& out) {
     if (ref == storage::kNullNodeRef) {
-        reportFailure(Status(ErrorCode::Corrupt, "page 0: the scene has no root node"));
+        reportFailure(Status(ErrorCode::Corrupt, "page 0: a hierarchy without a root node"));
         return Fetch::Missing;
     }
     std::span<const std::byte> payload;
@@ -400,8 +400,8 @@ Fetch NodePages::clusterRuns(
             continue;
         }
         std::uint32_t triangles = 0;
-        for (std::uint32_t c = run->first; c < run->first + run->count; ++c)
-            triangles += page->clusters()[c].info.triangleCount;
+        for (const storage::IndexedCluster& cluster : page->clusters(run->first, run->count))
+            triangles += cluster.info.triangleCount;
         out.push_back({r.page, payload.data(), run->first, run->count, triangles, bytesOf(payload)});
     }
     return result;

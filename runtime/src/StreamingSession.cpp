@@ -510,12 +510,10 @@ private:
             out.assign(draw.count, 1);
             return true;
         }
-        const Result<DecodedClusterPage> page = DecodedClusterPage::view({draw.payload, draw.payloadBytes});
-        if (!page || std::uint64_t{draw.first} + draw.count > page->clusters().size())
-            return false;
-        for (std::uint32_t c = draw.first; c < draw.first + draw.count; ++c)
-            out.push_back(page->clusters()[c].info.triangleCount);
-        return true;
+        const auto clusters = DecodedClusterPage::clustersOf({draw.payload, draw.payloadBytes}, draw.first, draw.count);
+        for (const storage::IndexedCluster& cluster : clusters)
+            out.push_back(cluster.info.triangleCount);
+        return clusters.size() == draw.count;
     }
 
     Renderer& mRenderer;

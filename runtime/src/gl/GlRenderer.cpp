@@ -453,12 +453,12 @@ void Renderer::Impl::bindArena() {
 
 bool Renderer::Impl::appendClusterCommands(const GeometryDraw& draw, std::uint32_t slot) {
     const Result<DecodedClusterPage> page = DecodedClusterPage::view({draw.payload, draw.payloadBytes});
-    if (!page || std::uint64_t{draw.first} + draw.count > page->clusters().size())
+    const auto clusters = page ? page->clusters(draw.first, draw.count) : std::span<const storage::IndexedCluster>{};
+    if (clusters.size() != draw.count || draw.count == 0)
         return false;
     const std::uint64_t base = std::uint64_t{slot} * static_cast<std::uint64_t>(slotBytes);
     const std::uint64_t indices = base + page->vertices().size_bytes();
-    for (std::uint32_t c = draw.first; c < draw.first + draw.count; ++c) {
-        const storage::IndexedCluster& cluster = page->clusters()[c];
+    for (const storage::IndexedCluster& cluster : clusters) {
         indexedCommands.push_back(
                 {cluster.info.triangleCount * 3,
                  1,
