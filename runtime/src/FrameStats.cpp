@@ -20,6 +20,7 @@ std::string FrameStats::toJson() const {
             {"nodes_deferred", nodesDeferred},
             {"pages_missing", pagesMissing},
             {"uploads_refused", uploadsRefused},
+            {"pages_decoded_on_draw", pagesDecodedOnDraw},
             {"occlusion_queries", occlusionQueries},
             {"queries_waited", queriesWaited},
             {"select_ms", selectMs},

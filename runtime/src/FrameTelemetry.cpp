@@ -100,7 +100,7 @@ const std::vector<Column>& columns() {
              [](T t) { return count(t.stats.geometryDraws); }},
             {{"pages_uploaded", "geometry pages uploaded to the GPU"},
              [](T t) { return count(t.stats.pagesUploaded); }},
-            {{"uploads_refused", "geometry pages over the GPU upload budget"},
+            {{"uploads_refused", "geometry pages over the GPU upload budget, or not decoded yet"},
              [](T t) { return count(t.stats.uploadsRefused); }},
             {{"pages_missing", "page lookups that found no usable page"},
              [](T t) { return count(t.stats.pagesMissing); }},
@@ -112,6 +112,15 @@ const std::vector<Column>& columns() {
              [](T t) { return count(t.stats.queriesWaited); }},
             {{"render_rate", "triangles drawn, % of the scene's (instances counted)"},
              [](T t) { return real(t.renderRatePercent); }},
+            // Added by issue 16 (format 2's decode stage, between the cache and the GPU).
+            {{"pages_decoded", "format 2 pages decoded for upload"},
+             [](T t) { return count(t.pagesDecoded); }},
+            {{"decode_ms", "decode threads' time spent on them"},
+             [](T t) { return real(t.decodeMs); }},
+            {{"decoded_held_bytes", "decoded bytes waiting for upload at the frame's end"},
+             [](T t) { return count(t.decodedHeldBytes); }},
+            {{"pages_decoded_on_draw", "pages decoded again on the render thread (arena too small)"},
+             [](T t) { return count(t.stats.pagesDecodedOnDraw); }},
     };
     return table;
 }

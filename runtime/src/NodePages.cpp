@@ -1,6 +1,6 @@
 #include "NodePages.h"
 
-#include "ClusterPageDecoder.h"
+#include "CachedClusterPage.h"
 
 #include <ff/storage/NodePageV2.h>
 
@@ -365,7 +365,7 @@ Fetch NodePages::payloadRuns(
 }
 
 // A format 2 cell's payloads: its representations, in its own page, name runs of whole clusters
-// in cluster pages the cache decoded (ClusterPageDecoder). Kinds this build does not draw are
+// in cluster pages as the cache keeps them (CachedClusterPage). Kinds this build does not draw are
 // passed over, so a file with a later issue's kinds still draws its clusters.
 Fetch NodePages::clusterRuns(
         const storage::NodeRecord& node, float priority, std::vector<PayloadRun>& out) {
@@ -391,7 +391,7 @@ Fetch NodePages::clusterRuns(
             result = Fetch::Missing;
             continue;
         }
-        Result<DecodedClusterPage> page = DecodedClusterPage::view(payload);
+        Result<CachedClusterPage> page = CachedClusterPage::view(payload);
         Result<storage::ClusterRun> run =
                 page ? page->run(r.offset, r.length, r.count) : Result<storage::ClusterRun>(page.status());
         if (!run) {

@@ -1,5 +1,6 @@
 #include "CachedPageAccess.h"
-#include "ClusterPageDecoder.h"
+#include "CachedClusterPage.h"
+#include "GeometryDecodeStage.h"
 #include "NodePages.h"
 
 #include <ff/cache/PageCache.h>
@@ -25,20 +26,20 @@ bool isV2(const storage::SceneIndex& scene) {
     return scene.formatVersion() == storage::kFormatVersion2;
 }
 
-/** Format 2's geometry pages are drawn as the cache's workers decode them, on each prototype's
- *  position grid. */
-std::shared_ptr<ClusterPageDecoder> clusterDecoder(const storage::SceneIndex& scene) {
+/** Each prototype's position grid: what format 2's clusters are dequantized on. */
+std::vector<storage::PositionGrid> positionGrids(const storage::SceneIndex& scene) {
     std::vector<storage::PositionGrid> grids;
     grids.reserve(scene.prototypesV2().size());
     for (const storage::PrototypeV2& p : scene.prototypesV2())
         grids.push_back(p.grid);
-    return std::make_shared<ClusterPageDecoder>(std::move(grids));
+    return grids;
 }
 
-/** What a session without --cache-mb keeps of a format 2 file: every page decoded, up to half
- *  the machine's memory (a file larger than that is drawn as well as that holds). */
+/** What a session without --cache-mb keeps of a format 2 file: every page as the cache keeps
+ *  it, up to half the machine's memory (a file larger than that is drawn as well as that
+ *  holds). */
 std::uint64_t unbudgetedBytes(const storage::IPageSource& source) {
-    const ClusterPageDecoder sizing({});
+    const ClusterPageIndexer sizing({});
     const std::uint64_t everything =
             source.pageCount() * std::uint64_t{sizing.maxDecodedBytes(source.pageSize())};
     const long pages = sysconf(_SC_PHYS_PAGES);
@@ -105,6 +106,10 @@ struct StreamingSession::Impl {
     const storage::SceneIndex& scene() const { return file ? *file : *streamedIndex; }
     std::shared_ptr<CountingSource> counting;
     std::unique_ptr<cache::PageCache> cache;
+    /** Format 2: decodes the pages the renderer is about to upload (the cache keeps them
+     *  encoded). After the cache, before the renderer: destroyed before the one, after the other. */
+    std::unique_ptr<GeometryDecodeStage> decodeStage;
+    DecodeStageStats previousDecode{}; ///< the stage's counters at the end of the last frame
     /** Every frame waits for the pages it lacks (a format 2 file opened without a budget: its
      *  geometry is decoded by the cache, so it cannot be mapped). */
     bool completeFrames = false;
@@ -219,7 +224,7 @@ StreamingSession::open(std::shared_ptr<storage::IPageSource> source, const Sessi
     // it can only drop (docs/methods.md, "At the budget's edge").
     cacheOptions.readOnlyWhatFits = true;
     if (isV2(scene)) {
-        cacheOptions.decoder = clusterDecoder(scene);
+        cacheOptions.decoder = std::make_shared<ClusterPageIndexer>(positionGrids(scene));
         pageBytes = cacheOptions.decoder->maxDecodedBytes(scene.pageSize());
         if (options.cacheBytes < pageBytes)
             return rootTooLarge();
@@ -245,7 +250,12 @@ Status StreamingSession::Impl::startDrawing(const SessionOptions& options) {
     occlusionTraversal = std::make_unique<OcclusionTraversal>(scene(), *pages);
     prefetchTraversal = std::make_unique<BackToFrontTraversal>(scene(), *pages);
     rendererOptions = options.renderer;
-    FF_ASSIGN_OR_RETURN(renderer, Renderer::create(scene(), options.renderer));
+    if (isV2(scene())) {
+        FF_ASSERT(cache != nullptr); // format 2 always streams through the cache
+        decodeStage = std::make_unique<GeometryDecodeStage>(
+                *cache, positionGrids(scene()), scene().pageSize(), DecodeStageOptions{});
+    }
+    FF_ASSIGN_OR_RETURN(renderer, Renderer::create(scene(), options.renderer, decodeStage.get()));
     return Status::ok();
 }
 
@@ -292,6 +302,8 @@ Status StreamingSession::Impl::frame(
         double& prefetchMs,
         Finish&& finish) {
     const FrameBracket bracket(*pages);
+    if (decodeStage)
+        decodeStage->beginFrame();
     FF_RETURN_IF_ERROR(renderer->beginFrame(context, output, stats));
     const double drawBefore = stats.drawMs;
     const auto start = std::chrono::steady_clock::now();
@@ -303,6 +315,10 @@ Status StreamingSession::Impl::frame(
             walker.traverse(context, {sink, visibility, *renderer, renderer.get()}, stats);
     const auto& fresh = walker.newFailures();
     failures.insert(failures.end(), fresh.begin(), fresh.end());
+    if (decodeStage) {
+        std::vector<Status> undecodable = decodeStage->takeFailures();
+        failures.insert(failures.end(), undecodable.begin(), undecodable.end());
+    }
     FF_RETURN_IF_ERROR(walked);
     // The batches the renderer drew during the walk are draw time, and the occlusion tests
     // their own, not selection.
@@ -374,20 +390,41 @@ void StreamingSession::Impl::record(
         t.geometryPageBytes = used.geometryPages * scene().pageSize();
         previous = now;
     }
+    if (decodeStage) {
+        const DecodeStageStats& now = decodeStage->stats();
+        t.pagesDecoded = now.decoded - previousDecode.decoded;
+        t.decodeMs = 1000.0 * (now.decodeSeconds - previousDecode.decodeSeconds);
+        t.decodedHeldBytes = now.heldBytes;
+        previousDecode = now;
+    }
     last = t;
 }
 
 template <typename Draw>
 Status StreamingSession::Impl::untilComplete(const FrameStats& stats, bool& stalled, Draw&& draw) {
+    const auto decodesAsked = [&] { return decodeStage ? decodeStage->stats().requested : 0; };
+    std::uint64_t asked = decodesAsked();
     FF_RETURN_IF_ERROR(draw());
-    // A complete frame also lacks no page: --method full defers nothing, it leaves pages out.
-    while (cache && (stats.nodesDeferred > 0 || (completeFrames && stats.pagesMissing > 0))) {
-        const std::uint64_t before = cache->stats().completed;
+    // A complete frame also lacks no page: --method full defers nothing, it leaves pages out
+    // (or, format 2, pages not decoded yet: refused uploads).
+    const auto lacking = [&] {
+        return stats.nodesDeferred + stats.uploadsRefused + (completeFrames ? stats.pagesMissing : 0);
+    };
+    while (cache && lacking() > 0) {
+        const bool awaitsDecodes = decodesAsked() != asked;
+        const std::uint64_t readBefore = cache->stats().completed;
+        const std::uint64_t lackedBefore = lacking();
         cache->drain();
+        if (decodeStage)
+            decodeStage->drain();
         stalled = true;
+        asked = decodesAsked();
         FF_RETURN_IF_ERROR(draw());
-        if (cache->stats().completed == before)
-            break; // nothing more fits the budget: this frame is as good as it gets
+        // Nothing more fits the budget, or (format 2) the decodes waited for drew nothing more
+        // (an arena smaller than the frame): this frame is as good as it gets.
+        const bool readMore = cache->stats().completed != readBefore;
+        if (!readMore && !(awaitsDecodes && lacking() < lackedBefore))
+            break;
     }
     return Status::ok();
 }
@@ -510,7 +547,7 @@ private:
             out.assign(draw.count, 1);
             return true;
         }
-        const auto clusters = DecodedClusterPage::clustersOf({draw.payload, draw.payloadBytes}, draw.first, draw.count);
+        const auto clusters = CachedClusterPage::clustersOf({draw.payload, draw.payloadBytes}, draw.first, draw.count);
         for (const storage::IndexedCluster& cluster : clusters)
             out.push_back(cluster.info.triangleCount);
         return clusters.size() == draw.count;
@@ -602,7 +639,7 @@ Status StreamingSession::setGpuBudget(std::uint64_t bytes) {
     Impl& s = *mImpl;
     s.renderer.reset(); // frees the old page arena before the new one is allocated
     s.rendererOptions.gpuBudgetBytes = bytes;
-    FF_ASSIGN_OR_RETURN(s.renderer, Renderer::create(s.scene(), s.rendererOptions));
+    FF_ASSIGN_OR_RETURN(s.renderer, Renderer::create(s.scene(), s.rendererOptions, s.decodeStage.get()));
     return Status::ok();
 }
 

@@ -171,10 +171,22 @@ Status decodeClusterPage(
         std::span<std::uint8_t> indices) {
     FF_ASSERT(vertices.size() >= index.vertexCount && indices.size() >= index.indexCount);
     FF_ASSERT(payload.size() >= index.usedBytes);
-    const std::span<const std::byte> used = payload.first(index.usedBytes);
-    for (const IndexedCluster& c : index.clusters) {
+    return decodeClusters(payload.first(index.usedBytes), index.clusters, grid, vertices, indices);
+}
+
+Status decodeClusters(
+        std::span<const std::byte> payload,
+        std::span<const IndexedCluster> clusters,
+        const PositionGrid& grid,
+        std::span<PackedVertex> vertices,
+        std::span<std::uint8_t> indices) {
+    for (const IndexedCluster& c : clusters) {
+        if (std::uint64_t{c.offset} + c.info.encodedBytes > payload.size() ||
+            std::uint64_t{c.firstVertex} + c.info.vertexCount > vertices.size() ||
+            std::uint64_t{c.firstIndex} + std::uint64_t{c.info.triangleCount} * 3 > indices.size())
+            return corrupt("cluster at byte " + std::to_string(c.offset) + " runs past its page");
         const Status decoded = decodeCluster(
-                used.subspan(c.offset, c.info.encodedBytes),
+                payload.subspan(c.offset, c.info.encodedBytes),
                 grid,
                 vertices.subspan(c.firstVertex, c.info.vertexCount),
                 indices.subspan(c.firstIndex, std::size_t{c.info.triangleCount} * 3));

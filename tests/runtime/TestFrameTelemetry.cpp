@@ -59,7 +59,12 @@ const std::vector<std::string> kPinnedColumns = {
         "occlusion_ms",
         "occlusion_queries",
         "queries_waited",
-        "render_rate"};
+        "render_rate",
+        // Added by issue 16.
+        "pages_decoded",
+        "decode_ms",
+        "decoded_held_bytes",
+        "pages_decoded_on_draw"};
 
 TEST(FrameTelemetryTest, ColumnsAreThePinnedOnesInOrder) {
     EXPECT_EQ(telemetryColumnNames(), kPinnedColumns);

@@ -1,6 +1,6 @@
 #include <ff/runtime/Renderer.h>
 
-#include "../ClusterPageDecoder.h"
+#include "../CachedClusterPage.h"
 #include "GlHeaders.h"
 #include "OcclusionQueries.h"
 #include "PyramidTests.h"
@@ -100,8 +100,13 @@ struct Renderer::Impl {
     GLuint cubeVao = 0;
     // The page arena: one slot per resident geometry page. Format 1: the page's triangle slots.
     // Format 2 (clustered): the decoded page's vertices, then its u8 cluster-local indices, the
-    // same buffer bound as the element array.
+    // same buffer bound as the element array; decoded off this thread (`decodedGeometry`) a frame
+    // before the upload, or, for a page the arena evicted within the frame that admitted it,
+    // here from the cached bytes the draw carries (`grids`, FrameStats::pagesDecodedOnDraw).
     bool clustered = false;
+    IDecodedGeometry* decodedGeometry = nullptr;
+    std::vector<storage::PositionGrid> grids;
+    std::uint64_t maxDecodedBytes = 0;
     GLuint arena = 0;
     GLsizeiptr slotBytes = 0;
     GLuint verticesPerSlot = 0;
@@ -164,7 +169,7 @@ struct Renderer::Impl {
     /** Binds the arena as the geometry's vertex (and, clustered, element) buffer. */
     void bindArena();
     /** The indexed commands drawing `draw`'s clusters from `slot` (false: a page that does not
-     *  view as a decoded cluster page, or clusters past its table, which NodePages already
+     *  view as a cached cluster page, or clusters past its table, which NodePages already
      *  refused to hand out). */
     bool appendClusterCommands(const GeometryDraw& draw, std::uint32_t slot);
     void drawBatch(const glm::mat4& viewProjection);
@@ -206,7 +211,11 @@ Renderer::Renderer(std::unique_ptr<Impl> impl) : mImpl(std::move(impl)) {}
 Renderer::~Renderer() = default;
 
 
-Result<std::unique_ptr<Renderer>> Renderer::create(const storage::SceneIndex& scene, const RendererOptions& options) {
+Result<std::unique_ptr<Renderer>> Renderer::create(
+        const storage::SceneIndex& scene, const RendererOptions& options, IDecodedGeometry* decodedGeometry) {
+    const bool clustered = scene.formatVersion() == storage::kFormatVersion2;
+    if (clustered && decodedGeometry == nullptr)
+        return Status(ErrorCode::InvalidArgument, "a format 2 scene is drawn through a decode stage");
     auto impl = std::make_unique<Impl>();
     impl->options = options;
     FF_ASSIGN_OR_RETURN(impl->geometryProgram, linkGlProgram({gl::kGeometryVertexShader}, gl::kGeometryFragmentShader));
@@ -220,8 +229,12 @@ Result<std::unique_ptr<Renderer>> Renderer::create(const storage::SceneIndex& sc
 
     // Slots hold a page's triangles without its trailer, so vertex offsets stay whole vertices;
     // a decoded cluster page's vertices and indices, rounded up to whole vertices.
-    impl->clustered = scene.formatVersion() == storage::kFormatVersion2;
+    impl->clustered = clustered;
     if (impl->clustered) {
+        impl->decodedGeometry = decodedGeometry;
+        for (const storage::PrototypeV2& p : scene.prototypesV2())
+            impl->grids.push_back(p.grid);
+        impl->maxDecodedBytes = storage::maxDecodedClusterBytes(scene.pageSize());
         constexpr std::uint64_t vertex = sizeof(storage::PackedVertex);
         const std::uint64_t decoded = storage::maxDecodedClusterBytes(scene.pageSize());
         impl->slotBytes = static_cast<GLsizeiptr>((decoded + vertex - 1) / vertex * vertex);
@@ -422,18 +435,27 @@ Result<std::uint32_t> Renderer::Impl::residentSlot(const GeometryDraw& draw, Fra
     freeSlots.pop_back();
     const GLintptr base = static_cast<GLintptr>(slot) * slotBytes;
     if (clustered) {
-        const Result<DecodedClusterPage> decoded =
-                DecodedClusterPage::view({draw.payload, draw.payloadBytes});
-        if (!decoded || decoded->vertices().size_bytes() + decoded->indices().size() >
-                                static_cast<std::uint64_t>(slotBytes)) {
+        Result<DecodedGeometry> again = Status::ok();
+        const DecodedGeometry* decoded = decodedGeometry->decoded(page);
+        if (decoded == nullptr) {
+            const Result<CachedClusterPage> cached = CachedClusterPage::view({draw.payload, draw.payloadBytes});
+            again = cached ? decodeCachedPage(*cached, grids, maxDecodedBytes) : Result<DecodedGeometry>(cached.status());
+            if (!again) {
+                freeSlots.push_back(slot);
+                return again.status().withContext("page " + std::to_string(page));
+            }
+            decoded = &*again;
+            ++stats.pagesDecodedOnDraw;
+        }
+        if (decoded->size() > static_cast<std::uint64_t>(slotBytes)) {
             freeSlots.push_back(slot);
-            return decoded ? Status(ErrorCode::Corrupt, "page " + std::to_string(page) + ": decodes past its slot")
-                           : decoded.status();
+            return Status(ErrorCode::Corrupt, "page " + std::to_string(page) + ": decodes past its slot");
         }
         const auto vertexBytes = static_cast<GLsizeiptr>(decoded->vertices().size_bytes());
         bufferSubData(arena, base, vertexBytes, decoded->vertices().data());
         bufferSubData(arena, base + vertexBytes, static_cast<GLsizeiptr>(decoded->indices().size()),
                       decoded->indices().data());
+        decodedGeometry->uploaded(page);
     } else {
         bufferSubData(arena, base, slotBytes, draw.payload);
     }
@@ -452,12 +474,12 @@ void Renderer::Impl::bindArena() {
 }
 
 bool Renderer::Impl::appendClusterCommands(const GeometryDraw& draw, std::uint32_t slot) {
-    const Result<DecodedClusterPage> page = DecodedClusterPage::view({draw.payload, draw.payloadBytes});
+    const Result<CachedClusterPage> page = CachedClusterPage::view({draw.payload, draw.payloadBytes});
     const auto clusters = page ? page->clusters(draw.first, draw.count) : std::span<const storage::IndexedCluster>{};
     if (clusters.size() != draw.count || draw.count == 0)
         return false;
     const std::uint64_t base = std::uint64_t{slot} * static_cast<std::uint64_t>(slotBytes);
-    const std::uint64_t indices = base + page->vertices().size_bytes();
+    const std::uint64_t indices = base + std::uint64_t{page->vertexCount()} * sizeof(storage::PackedVertex);
     for (const storage::IndexedCluster& cluster : clusters) {
         indexedCommands.push_back(
                 {cluster.info.triangleCount * 3,
@@ -516,7 +538,7 @@ Status Renderer::Impl::drawGeometry(const DrawList& list, const glm::mat4& viewP
             commands.push_back({draw.count * 3, 1, *slot * verticesPerSlot + draw.first * 3, draw.transform});
         else if (!appendClusterCommands(draw, *slot)) {
             indexedCommands.clear();
-            return Status(ErrorCode::Corrupt, "page " + std::to_string(draw.page) + ": not a decoded cluster page");
+            return Status(ErrorCode::Corrupt, "page " + std::to_string(draw.page) + ": not a cached cluster page");
         }
     }
     drawBatch(viewProjection);
@@ -791,7 +813,12 @@ bool Renderer::anyVisible(QueryTicket ticket) {
 
 bool Renderer::admit(std::uint64_t geometryPage) {
     Impl& s = *mImpl;
-    if (s.uploadLimit == 0 || s.slotOfPage.contains(geometryPage) || s.admitted.contains(geometryPage))
+    if (s.slotOfPage.contains(geometryPage) || s.admitted.contains(geometryPage))
+        return true;
+    // Asked before the upload budget, so the pages it refuses this frame are decoded for the next.
+    if (s.clustered && !s.decodedGeometry->prepare(geometryPage))
+        return false;
+    if (s.uploadLimit == 0)
         return true;
     if (s.admitted.size() >= s.uploadLimit)
         return false;

@@ -10,9 +10,10 @@
 namespace ff::runtime {
 
 /** A run of one Geometry page's items, drawn with transforms[transform]: triangle slots of a
- *  format 1 page (PackedTriangle), or whole clusters of a format 2 page as the cache decoded it
- *  (runtime/src/ClusterPageDecoder.h). Carries the page's bytes, so the renderer uploads what it
- *  is given and looks nothing up again. */
+ *  format 1 page (PackedTriangle), or whole clusters of a format 2 page as the cache keeps it,
+ *  encoded behind its cluster table (runtime/src/CachedClusterPage.h). Carries the page's bytes:
+ *  format 1's are uploaded as they are; format 2's say where each cluster's vertices and indices
+ *  lie, which come decoded from the renderer's IDecodedGeometry. */
 struct GeometryDraw {
     std::uint64_t page;       ///< the GPU arena's key
     const std::byte* payload; ///< the page's payload as resident, valid this frame

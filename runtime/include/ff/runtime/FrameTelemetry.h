@@ -43,6 +43,10 @@ struct FrameTelemetry {
     std::uint64_t refused = 0;
     std::uint64_t noRoom = 0;
     std::uint64_t gpuResidentBytes = 0;
+    // Format 2's decode stage during this frame (all 0 for format 1).
+    std::uint64_t pagesDecoded = 0;
+    double decodeMs = 0.0; ///< decode threads' time, summed over threads
+    std::uint64_t decodedHeldBytes = 0; ///< at the frame's end
     /** Page bytes the frame used (found Ready), by type: its working set. */
     std::uint64_t nodePageBytes = 0;
     std::uint64_t geometryPageBytes = 0;

@@ -1,6 +1,7 @@
 #pragma once
 
 #include <ff/runtime/Camera.h>
+#include <ff/runtime/DecodedGeometry.h>
 #include <ff/runtime/DrawList.h>
 #include <ff/runtime/FrameStats.h>
 #include <ff/runtime/Image.h>
@@ -46,15 +47,21 @@ enum class FrameOutput {
  *
  * A frame is beginFrame(), draw() once per batch (the traversal's IDrawSink), then
  * finishImage() or finishPresent(). It is also the traversal's IUploadGate (at most
- * FrameBudgets::gpuUploadsPerFrame pages not yet in the arena are admitted per frame) and its
+ * FrameBudgets::gpuUploadsPerFrame pages not yet in the arena are admitted per frame; a format 2
+ * page only once it is decoded, IDecodedGeometry) and its
  * IOcclusionTester (hardware occlusion queries against the frame's depth so far).
  *
  * Needs a current GL 4.5 context; main thread only.
  */
 class Renderer final : public IDrawSink, public IUploadGate, public IOcclusionTester {
 public:
+    /** `decodedGeometry`: where a format 2 scene's pages come decoded from (required for one,
+     *  borrowed: it must outlive the renderer). Errors: InvalidArgument without it, Internal
+     *  (GL). */
     [[nodiscard]] static Result<std::unique_ptr<Renderer>> create(
-            const storage::SceneIndex& scene, const RendererOptions& options = {});
+            const storage::SceneIndex& scene,
+            const RendererOptions& options = {},
+            IDecodedGeometry* decodedGeometry = nullptr);
     ~Renderer() override;
     Renderer(const Renderer&) = delete;
     Renderer& operator=(const Renderer&) = delete;

@@ -122,4 +122,15 @@ struct ClusterRun {
         std::span<PackedVertex> vertices,
         std::span<std::uint8_t> indices);
 
+/** decodeClusterPage() over a table of clusters kept apart from their page (the runtime's cache
+ *  keeps the table beside the encoded bytes): `payload` holds the page's encoded bytes from
+ *  offset 0, and each cluster's bytes, vertices and indices are checked to lie inside
+ *  `payload`, `vertices` and `indices` (Corrupt otherwise), so a table of any origin is safe. */
+[[nodiscard]] Status decodeClusters(
+        std::span<const std::byte> payload,
+        std::span<const IndexedCluster> clusters,
+        const PositionGrid& grid,
+        std::span<PackedVertex> vertices,
+        std::span<std::uint8_t> indices);
+
 } // namespace ff::storage
