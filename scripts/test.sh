@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # The whole test suite: install, build with warnings as errors under AddressSanitizer and
 # UndefinedBehaviorSanitizer and run every test; then build the threaded modules under
-# ThreadSanitizer and run their tests.
+# ThreadSanitizer and run their tests (and the runtime's decode stage).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
@@ -31,5 +31,7 @@ cmake --build build-plain -j "$jobs" --target ff_viewer_tests ff_runtime_tests f
 ctest --test-dir build-plain --output-on-failure -R "$memory_test|$large_test"
 
 cmake -S . -B build-tsan -G Ninja -DCMAKE_BUILD_TYPE=Debug -DFF_WERROR=ON -DFF_SANITIZE=thread
-cmake --build build-tsan -j "$jobs" --target ff_builder_tests ff_storage_tests ff_cache_tests
+cmake --build build-tsan -j "$jobs" --target ff_builder_tests ff_storage_tests ff_cache_tests ff_runtime_tests
 ctest --test-dir build-tsan --output-on-failure -j "$jobs" -L "builder|storage|cache" -E "$large_test"
+# The runtime's own threads: format 2's decode stage between the cache and the GPU arena.
+ctest --test-dir build-tsan --output-on-failure -j "$jobs" -R "CachedClusterPageTest"

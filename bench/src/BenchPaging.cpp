@@ -11,6 +11,7 @@
 #include <nlohmann/json.hpp>
 
 #include <cstdio>
+#include <initializer_list>
 
 namespace ff::bench {
 
@@ -31,7 +32,28 @@ struct PagingParams {
     std::int64_t teleports = 20;
     std::int64_t teleportSeed = 3;
     std::int64_t teleportCacheMb = 64;
+    /** Flags every build gets ("build": ["--format", "2"]). */
+    std::vector<std::string> buildFlags;
 };
+
+/** " Every scene is built with `FLAGS`." (nothing without flags). */
+std::string buildFlagsNote(const std::vector<std::string>& flags) {
+    if (flags.empty())
+        return "";
+    std::string joined;
+    for (const std::string& flag : flags)
+        joined += (joined.empty() ? "" : " ") + flag;
+    return " Every scene is built with `" + joined + "`.";
+}
+
+/** `farfield build -q --generate SPEC` with the scenario's flags, then `extra`. */
+std::vector<std::string> buildArgs(const PagingParams& p, const std::string& ff, const std::string& spec,
+                                   std::initializer_list<std::string> extra) {
+    std::vector<std::string> argv = {ff, "build", "-q", "--generate", spec};
+    argv.insert(argv.end(), p.buildFlags.begin(), p.buildFlags.end());
+    argv.insert(argv.end(), extra);
+    return argv;
+}
 
 Status runPaging(const PagingParams& p, const Scenario& scenario, const BenchOptions& options) {
     ScenarioRun scenarioRun(scenario, options);
@@ -59,8 +81,9 @@ Status runPaging(const PagingParams& p, const Scenario& scenario, const BenchOpt
                          "geometry_page_bytes", "nodes_visited", "triangles_drawn", "frame_ms"});
     for (const Step& step : ladder) {
         std::fprintf(stderr, "%s: working set of %s\n", prefix.c_str(), step.spec.c_str());
-        FF_RETURN_IF_ERROR(runChild({ff, "build", "-q", "--generate", step.spec, "--memory-budget", step.memoryBudget,
-                                     "-o", scene.string(), "--report", (work / "report.json").string()})
+        FF_RETURN_IF_ERROR(runChild(buildArgs(p, ff, step.spec,
+                                              {"--memory-budget", step.memoryBudget, "-o", scene.string(), "--report",
+                                               (work / "report.json").string()}))
                                    .status());
         // One view, the same in scene radii for every size: the orbit's first frame.
         PathSpec orbit{.generator = "orbit", .options = {}};
@@ -90,7 +113,7 @@ Status runPaging(const PagingParams& p, const Scenario& scenario, const BenchOpt
     const std::string terrain = "terrain:triangles=" + std::to_string(p.teleportTriangles);
     const std::string teleports = std::to_string(p.teleports);
     std::fprintf(stderr, "%s: %s teleports across %s\n", prefix.c_str(), teleports.c_str(), terrain.c_str());
-    FF_RETURN_IF_ERROR(runChild({ff, "build", "-q", "--generate", terrain, "-o", scene.string()}).status());
+    FF_RETURN_IF_ERROR(runChild(buildArgs(p, ff, terrain, {"-o", scene.string()})).status());
     PathSpec jumps{.generator = "teleports", .options = {}};
     jumps.options.frames = p.teleportFrames;
     jumps.options.teleports = p.teleports;
@@ -109,7 +132,7 @@ Status runPaging(const PagingParams& p, const Scenario& scenario, const BenchOpt
     std::ostringstream md;
     md << "`" << options.command << "`. **Working set**: the bytes resident for one complete frame (`replay --sync`, "
        << "epsilon = 1, 640x480, the first frame of `farfield path orbit`: the same view in scene radii for every "
-       << "size) against scene size.\n\n"
+       << "size) against scene size." << buildFlagsNote(p.buildFlags) << "\n\n"
        << workingSet.markdown() << "\n![working set against scene size](" << prefix << "-working-set.png)\n\n"
        << "**Teleports**: " << teleports << " jumps across `" << terrain << "` with a cold " << p.teleportCacheMb
        << " MiB cache, asynchronous (`" << prefix << "-teleports.csv` per frame, summary below).\n\n```json\n"
@@ -136,6 +159,7 @@ Result<BenchRun> preparePaging(const Scenario& scenario) {
     p.teleports = tp.integer("jumps", p.teleports);
     p.teleportSeed = tp.integer("seed", p.teleportSeed);
     p.teleportCacheMb = tp.integer("cache_mb", p.teleportCacheMb);
+    p.buildFlags = reader.strings("build", {});
     if (p.workingSetCacheMb < 1)
         ws.fail("cache_mb", "must be >= 1");
     if (p.teleportTriangles < 1 || p.teleportCacheMb < 1 || p.teleportSeed < 0)

@@ -31,7 +31,6 @@ struct Finished {
 /** A page the stage knows of, main thread only. */
 struct Entry {
     bool ready = false;          ///< decoded (else queued or being decoded)
-    bool uploaded = false;       ///< freed at the next beginFrame
     std::uint64_t lastAsked = 0; ///< the frame that last called prepare() for it
     DecodedGeometry geometry;
 };
@@ -153,11 +152,11 @@ void GeometryDecodeStage::beginFrame() {
         };
         s.queue.erase(std::remove_if(s.queue.begin(), s.queue.end(), unwanted), s.queue.end());
     }
-    // Decoded pages uploaded, or not asked for in the frame before, are freed.
+    // Decoded pages not asked for in the frame before are freed (uploaded ones already are).
     for (auto it = s.entries.begin(); it != s.entries.end();) {
         Entry& e = it->second;
-        if (e.ready && (e.uploaded || e.lastAsked < lastFrame)) {
-            s.stats.dropped += e.uploaded ? 0 : 1;
+        if (e.ready && e.lastAsked < lastFrame) {
+            ++s.stats.dropped;
             s.stats.heldBytes -= e.geometry.size();
             it = s.entries.erase(it);
         } else {
@@ -173,6 +172,11 @@ void GeometryDecodeStage::beginFrame() {
             s.failedPages.insert(f.page);
             s.failures.push_back(f.geometry.status());
             ++s.stats.failed;
+            continue;
+        }
+        if (it->second.lastAsked < lastFrame) { // asked for no more: no use keeping it
+            s.entries.erase(it);
+            ++s.stats.dropped;
             continue;
         }
         Entry& e = it->second;
@@ -216,8 +220,14 @@ const DecodedGeometry* GeometryDecodeStage::decoded(std::uint64_t page) const {
 }
 
 void GeometryDecodeStage::uploaded(std::uint64_t page) {
-    if (const auto it = mImpl->entries.find(page); it != mImpl->entries.end())
-        it->second.uploaded = true;
+    Impl& s = *mImpl;
+    const auto it = s.entries.find(page);
+    if (it == s.entries.end() || !it->second.ready)
+        return;
+    // The GPU has its copy (glBufferSubData copies before it returns): the room is free now,
+    // for pages this frame still asks for.
+    s.stats.heldBytes -= it->second.geometry.size();
+    s.entries.erase(it);
 }
 
 void GeometryDecodeStage::drain() {

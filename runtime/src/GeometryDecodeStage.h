@@ -6,12 +6,12 @@
 //   main thread:     beginFrame() -> prepare(page) for each page the frame would upload: a
 //                    decoded page may be uploaded now (decoded(), then uploaded()); one that is
 //                    not is pinned in the cache and queued -> the renderer draws its cell
-//                    coarser this frame.
+//                    coarser this frame. uploaded() frees a decoded page at once.
 //   decode threads:  take the oldest queued page, decode its pinned cached bytes
 //                    (CachedClusterPage.h), release the pin, hand the result back.
 //   next beginFrame: finished decodes become ready (so answers hold for a whole frame); ready
-//                    pages that were uploaded or not asked for in the frame before are freed,
-//                    queued ones not asked for again are cancelled.
+//                    pages not asked for in the frame before are freed, queued ones not asked
+//                    for again are cancelled.
 //
 // Memory: pages queued, decoding or decoded at once are at most `capacity`, so the decoded
 // bytes held outside the cache's budget are at most capacity x maxDecodedClusterBytes; queued
@@ -31,8 +31,10 @@ namespace ff::runtime {
 
 struct DecodeStageOptions {
     unsigned threads = 2;
-    /** Pages queued, being decoded, or decoded and not yet freed, at most (>= 1). Twice the
-     *  default uploads per frame: one frame's uploads while the next frame's are decoded. */
+    /** Pages queued, being decoded, or decoded and not yet uploaded, at most (>= 1): what a
+     *  frame can upload at most, and what the decode threads work ahead on. Twice replay's and
+     *  view's default --uploads-per-frame (64 installs): one frame's uploads while the next
+     *  frame's are decoded. */
     std::uint32_t capacity = 128;
 };
 
@@ -42,10 +44,10 @@ struct DecodeStageStats {
     std::uint64_t decoded = 0;      ///< decodes finished and made ready
     std::uint64_t decodedBytes = 0; ///< what they decoded to
     std::uint64_t cancelled = 0;    ///< queued, not asked for again
-    std::uint64_t dropped = 0;      ///< decoded but neither uploaded nor asked for again
+    std::uint64_t dropped = 0;      ///< decoded but not asked for again
     std::uint64_t refused = 0;      ///< asks not queued: the stage was at capacity
     std::uint64_t failed = 0;       ///< pages whose decode failed, each counted once
-    std::uint64_t heldBytes = 0;    ///< decoded bytes held now
+    std::uint64_t heldBytes = 0;    ///< decoded bytes held now (ready, not yet uploaded)
     std::uint64_t peakHeldBytes = 0;
     double decodeSeconds = 0.0; ///< decode threads' time spent decoding
 };

@@ -402,29 +402,46 @@ void StreamingSession::Impl::record(
 
 template <typename Draw>
 Status StreamingSession::Impl::untilComplete(const FrameStats& stats, bool& stalled, Draw&& draw) {
-    const auto decodesAsked = [&] { return decodeStage ? decodeStage->stats().requested : 0; };
-    std::uint64_t asked = decodesAsked();
+    // What the stage was given to do (queued, or refused for want of room): waiting for the
+    // decode threads may draw more.
+    const auto decodeWork = [&] {
+        return decodeStage ? decodeStage->stats().requested + decodeStage->stats().refused : 0;
+    };
+    std::uint64_t work = decodeWork();
     FF_RETURN_IF_ERROR(draw());
     // A complete frame also lacks no page: --method full defers nothing, it leaves pages out
-    // (or, format 2, pages not decoded yet: refused uploads).
+    // (format 2: also pages not decoded yet, which it refuses to upload).
     const auto lacking = [&] {
-        return stats.nodesDeferred + stats.uploadsRefused + (completeFrames ? stats.pagesMissing : 0);
+        return stats.nodesDeferred + (decodeStage ? stats.uploadsRefused : 0) +
+               (completeFrames ? stats.pagesMissing : 0);
     };
+    std::uint64_t leastLacking = lacking();
+    int triesWithoutGain = 0;
     while (cache && lacking() > 0) {
-        const bool awaitsDecodes = decodesAsked() != asked;
+        const bool awaitsDecodes = decodeWork() != work;
         const std::uint64_t readBefore = cache->stats().completed;
-        const std::uint64_t lackedBefore = lacking();
-        cache->drain();
+        // Decodes first: their pins release cache pages the reads may need room from.
         if (decodeStage)
             decodeStage->drain();
+        cache->drain();
         stalled = true;
-        asked = decodesAsked();
+        work = decodeWork();
         FF_RETURN_IF_ERROR(draw());
-        // Nothing more fits the budget, or (format 2) the decodes waited for drew nothing more
-        // (an arena smaller than the frame): this frame is as good as it gets.
-        const bool readMore = cache->stats().completed != readBefore;
-        if (!readMore && !(awaitsDecodes && lacking() < lackedBefore))
+        if (cache->stats().completed != readBefore) {
+            leastLacking = lacking(); // a read can deepen the cut: start counting afresh
+            triesWithoutGain = 0;
+            continue;
+        }
+        // Nothing more fits the budget and nothing is being decoded, or two tries of decoding
+        // drew nothing more (an arena smaller than the frame): as good as this frame gets.
+        if (!awaitsDecodes)
             break;
+        if (lacking() < leastLacking) {
+            leastLacking = lacking();
+            triesWithoutGain = 0;
+        } else if (++triesWithoutGain >= 2) {
+            break;
+        }
     }
     return Status::ok();
 }

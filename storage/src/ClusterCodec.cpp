@@ -376,8 +376,13 @@ Status decodeCluster(
         std::span<PackedVertex> vertices,
         std::span<std::uint8_t> indices) {
     FF_ASSIGN_OR_RETURN(const ClusterHeader h, readHeader(bytes));
-    FF_ASSERT(
-            vertices.size() >= h.vertexCount && indices.size() >= std::size_t{h.triangleCount} * 3);
+    // The room given comes from a table kept apart from the cluster (a page's index, a cache's
+    // copy of it): one that disagrees with the cluster's own header is corrupt, not a bug here.
+    if (vertices.size() < h.vertexCount || indices.size() < std::size_t{h.triangleCount} * 3)
+        return corrupt(
+                "cluster of " + std::to_string(h.vertexCount) + " vertices and " +
+                std::to_string(h.triangleCount) + " triangles, room for " +
+                std::to_string(vertices.size()) + " and " + std::to_string(indices.size() / 3));
     const auto* streams =
             reinterpret_cast<const unsigned char*>(bytes.data() + sizeof(ClusterHeader));
     const Status decodedVertices =

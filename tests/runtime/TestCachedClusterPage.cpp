@@ -199,12 +199,20 @@ TEST_F(CachedClusterPageTest, DecodingRefusesATableThatRunsPastThePageOrDecodesP
     EXPECT_EQ(bounded.status().code(), ErrorCode::Corrupt);
     // The last cluster's first vertex moved past the page's vertices.
     auto* table = reinterpret_cast<storage::IndexedCluster*>(bytes.data() + 32);
+    const std::uint32_t lastFirstVertex = table[2].firstVertex;
     table[2].firstVertex = page->vertexCount();
     const auto overrun = decodeCachedPage(
             *CachedClusterPage::view(bytes), mGrids, storage::maxDecodedClusterBytes(kPageSize));
     ASSERT_FALSE(overrun.isOk());
     EXPECT_NE(overrun.status().message().find("runs past"), std::string::npos)
             << overrun.status().toString();
+    // A table that gives a cluster fewer vertices than its own header: refused, not overrun.
+    table[2].firstVertex = lastFirstVertex;
+    table[1].info.vertexCount -= 1;
+    const auto disagreeing = decodeCachedPage(
+            *CachedClusterPage::view(bytes), mGrids, storage::maxDecodedClusterBytes(kPageSize));
+    ASSERT_FALSE(disagreeing.isOk());
+    EXPECT_EQ(disagreeing.status().code(), ErrorCode::Corrupt);
     // Not a cached page at all, and every prefix of one.
     EXPECT_FALSE(CachedClusterPage::view(std::vector<std::byte>(64)).isOk());
     for (std::size_t n = 0; n < bytes.size(); ++n)
@@ -269,15 +277,14 @@ TEST_F(CachedClusterPageTest, TheStageDecodesAPageForTheFrameAfterItIsAskedAndFr
     EXPECT_EQ(stage.stats().decoded, 1u);
     EXPECT_EQ(stage.stats().decodedBytes, expected->size());
     EXPECT_EQ(stage.stats().heldBytes, expected->size());
-    // Uploaded: still there for the rest of the frame (a batch may upload it again), then freed.
+    // Uploaded: the GPU has it, the decoded copy is freed at once, and so is its room.
     stage.uploaded(page);
-    EXPECT_NE(stage.decoded(page), nullptr);
-    stage.beginFrame();
     EXPECT_EQ(stage.decoded(page), nullptr);
     EXPECT_EQ(stage.stats().heldBytes, 0u);
     EXPECT_EQ(stage.stats().dropped, 0u);
     EXPECT_EQ(stage.stats().peakHeldBytes, expected->size());
-    // Asked again (the arena evicted it): decoded again.
+    // Asked again a later frame (the arena evicted it): decoded again.
+    stage.beginFrame();
     EXPECT_FALSE(stage.prepare(page));
     EXPECT_EQ(stage.stats().requested, 2u);
 }
@@ -302,10 +309,12 @@ TEST_F(CachedClusterPageTest, TheStageHoldsNoMoreThanItsCapacityAndFreesWhatIsNo
     EXPECT_EQ(stage.stats().heldBytes, 0u);
     EXPECT_EQ(stage.stats().dropped, 1u);
     EXPECT_EQ(stage.decoded(mGeometryPages[0]), nullptr);
+    // A page not resident in the cache is not queued (the traversal asks the cache for it),
+    // though there is room.
+    EXPECT_FALSE(stage.prepare(mNodePage));
+    EXPECT_EQ(stage.stats().requested, 1u);
+    EXPECT_EQ(stage.stats().refused, 1u);
     EXPECT_FALSE(stage.prepare(mGeometryPages[1]));
-    EXPECT_EQ(stage.stats().requested, 2u);
-    // A page not resident in the cache is not asked for (the traversal asks the cache).
-    EXPECT_FALSE(stage.prepare(mNodePage + 100));
     EXPECT_EQ(stage.stats().requested, 2u);
     stage.drain();
     stage.beginFrame();

@@ -818,9 +818,11 @@ bool Renderer::admit(std::uint64_t geometryPage) {
     // Asked before the upload budget, so the pages it refuses this frame are decoded for the next.
     if (s.clustered && !s.decodedGeometry->prepare(geometryPage))
         return false;
-    if (s.uploadLimit == 0)
+    if (s.uploadLimit == 0 && !s.clustered)
         return true;
-    if (s.admitted.size() >= s.uploadLimit)
+    // Format 2 remembers what it admitted even without a limit: once uploaded, the decoded copy
+    // is gone, and the answer must stay yes for the rest of the frame.
+    if (s.uploadLimit != 0 && s.admitted.size() >= s.uploadLimit)
         return false;
     s.admitted.insert(geometryPage);
     return true;

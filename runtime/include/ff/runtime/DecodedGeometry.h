@@ -47,7 +47,8 @@ public:
     /** The decoded page prepare() answered true for, until uploaded() or the next frame;
      *  null otherwise. */
     [[nodiscard]] virtual const DecodedGeometry* decoded(std::uint64_t page) const = 0;
-    /** The page is on the GPU: its decoded copy is no longer needed after this frame. */
+    /** The page is on the GPU: its decoded copy is freed now (decoded() is null from here on;
+     *  a renderer that needs it again this frame decodes it itself). */
     virtual void uploaded(std::uint64_t page) = 0;
 };
 

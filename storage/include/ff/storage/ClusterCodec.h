@@ -111,7 +111,8 @@ encodedClusterBound(std::size_t vertexCount, std::size_t triangleCount) noexcept
  * Decodes the cluster that starts `bytes` into `vertices` (info.vertexCount) and `indices`
  * (3 per triangle, cluster-local), dequantized on `grid`. Triangles come back in their order
  * and winding, but each may start at another of its vertices (the index codec rotates them).
- * A corrupt cluster is an error, and whatever the spans hold then is garbage.
+ * A corrupt cluster is an error, and whatever the spans hold then is garbage; so are spans too
+ * small for the counts its header gives (Corrupt: they come from a table beside the cluster).
  */
 [[nodiscard]] Status decodeCluster(
         std::span<const std::byte> bytes,
