@@ -432,15 +432,20 @@ Status StreamingSession::Impl::untilComplete(const FrameStats& stats, bool& stal
             triesWithoutGain = 0;
             continue;
         }
-        // Nothing more fits the budget and nothing is being decoded, or two tries of decoding
-        // drew nothing more (an arena smaller than the frame): as good as this frame gets.
+        // Nothing more fits the budget and nothing is being decoded: as good as this frame gets.
         if (!awaitsDecodes)
             break;
         if (lacking() < leastLacking) {
             leastLacking = lacking();
             triesWithoutGain = 0;
         } else if (++triesWithoutGain >= 2) {
-            break;
+            // Two tries of decoding drew nothing more: the frame's pages do not fit the GPU
+            // arena, and each try evicts what the next needs decoded again. A frame that has
+            // to be complete decodes the rest as it draws, on this thread, once.
+            renderer->setDecodeOnDraw(true);
+            const Status drawn = draw();
+            renderer->setDecodeOnDraw(false);
+            return drawn;
         }
     }
     return Status::ok();

@@ -160,6 +160,19 @@ TEST(BuildCommandTest, FormatTwoIsCheckedAndDrawn) {
     EXPECT_EQ(frame.at("nodes_deferred").get<std::uint64_t>(), 0u);
     EXPECT_EQ(frame.at("triangles_drawn").get<std::uint64_t>(), report.at("stored_triangles").get<std::uint64_t>());
     EXPECT_TRUE(fs::exists(dir / "skull.png"));
+
+    // A GPU arena of a few pages, smaller than the frame: pages evicted within the frame that
+    // uploaded them are decoded again on the render thread, and the image does not change.
+    const ProcessResult small = runFarfield(
+            {"render", scene.string(), "-o", (dir / "small.png").string(), "--epsilon", "0", "--gpu-budget", "1MiB",
+             "--stats", (dir / "small.json").string()},
+            dir);
+    ASSERT_TRUE(exitedWith(small, 0)) << small.describe();
+    const json smallFrame = readJsonFile(dir / "small.json").at("frames").back();
+    EXPECT_EQ(smallFrame.at("nodes_deferred").get<std::uint64_t>(), 0u);
+    EXPECT_GT(smallFrame.at("pages_decoded_on_draw").get<std::uint64_t>(), 0u);
+    EXPECT_EQ(frame.at("pages_decoded_on_draw").get<std::uint64_t>(), 0u);
+    EXPECT_EQ(differingPixels(decodeImage(dir / "skull.png"), decodeImage(dir / "small.png")), 0u);
 }
 
 // ------------------------------------------------------------------------------------------

@@ -18,6 +18,7 @@
 #include <chrono>
 #include <cmath>
 #include <initializer_list>
+#include <optional>
 #include <cstddef>
 #include <string>
 #include <unordered_map>
@@ -105,6 +106,7 @@ struct Renderer::Impl {
     // here from the cached bytes the draw carries (`grids`, FrameStats::pagesDecodedOnDraw).
     bool clustered = false;
     IDecodedGeometry* decodedGeometry = nullptr;
+    bool decodeOnDraw = false; ///< setDecodeOnDraw(): admit pages not decoded yet, decode them here
     std::vector<storage::PositionGrid> grids;
     std::uint64_t maxDecodedBytes = 0;
     GLuint arena = 0;
@@ -435,16 +437,17 @@ Result<std::uint32_t> Renderer::Impl::residentSlot(const GeometryDraw& draw, Fra
     freeSlots.pop_back();
     const GLintptr base = static_cast<GLintptr>(slot) * slotBytes;
     if (clustered) {
-        Result<DecodedGeometry> again = Status::ok();
+        std::optional<DecodedGeometry> again; // a page decoded here, not by the stage
         const DecodedGeometry* decoded = decodedGeometry->decoded(page);
         if (decoded == nullptr) {
             const Result<CachedClusterPage> cached = CachedClusterPage::view({draw.payload, draw.payloadBytes});
-            again = cached ? decodeCachedPage(*cached, grids, maxDecodedBytes) : Result<DecodedGeometry>(cached.status());
-            if (!again) {
+            Result<DecodedGeometry> decodedHere =
+                    cached ? decodeCachedPage(*cached, grids, maxDecodedBytes) : Result<DecodedGeometry>(cached.status());
+            if (!decodedHere) {
                 freeSlots.push_back(slot);
-                return again.status().withContext("page " + std::to_string(page));
+                return decodedHere.status().withContext("page " + std::to_string(page));
             }
-            decoded = &*again;
+            decoded = &again.emplace(std::move(*decodedHere));
             ++stats.pagesDecodedOnDraw;
         }
         if (decoded->size() > static_cast<std::uint64_t>(slotBytes)) {
@@ -816,7 +819,7 @@ bool Renderer::admit(std::uint64_t geometryPage) {
     if (s.slotOfPage.contains(geometryPage) || s.admitted.contains(geometryPage))
         return true;
     // Asked before the upload budget, so the pages it refuses this frame are decoded for the next.
-    if (s.clustered && !s.decodedGeometry->prepare(geometryPage))
+    if (s.clustered && !s.decodedGeometry->prepare(geometryPage) && !s.decodeOnDraw)
         return false;
     if (s.uploadLimit == 0 && !s.clustered)
         return true;
@@ -826,6 +829,10 @@ bool Renderer::admit(std::uint64_t geometryPage) {
         return false;
     s.admitted.insert(geometryPage);
     return true;
+}
+
+void Renderer::setDecodeOnDraw(bool on) noexcept {
+    mImpl->decodeOnDraw = on;
 }
 
 Result<Image> Renderer::finishImage(FrameStats& stats) {

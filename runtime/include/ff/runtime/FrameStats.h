@@ -27,7 +27,8 @@ struct FrameStats {
     /** Geometry pages the frame's GPU upload budget refused (their cells were drawn as cubes). */
     std::uint64_t uploadsRefused = 0;
     /** Format 2 pages decoded on the render thread: admitted, then evicted from the GPU arena
-     *  before their draw within the same frame (an arena smaller than the frame). */
+     *  before their draw within the same frame, or, for a frame that must be complete, not
+     *  decoded yet when it was drawn the last time (both: an arena smaller than the frame). */
     std::uint64_t pagesDecodedOnDraw = 0;
     std::uint64_t occlusionQueries = 0; ///< occlusion tests issued (a multiquery counts once)
     std::uint64_t queriesWaited = 0;    ///< answers the walk had to wait for (nothing else to do)

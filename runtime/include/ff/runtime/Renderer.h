@@ -79,6 +79,11 @@ public:
 
     /** Admits a geometry page for this frame (see the class comment). */
     [[nodiscard]] bool admit(std::uint64_t geometryPage) override;
+    /** Format 2: admit pages the decode stage has not decoded yet and decode them on this
+     *  thread as they are drawn (FrameStats::pagesDecodedOnDraw). For a frame that must be
+     *  complete and cannot be otherwise: one whose pages do not all fit the GPU arena, so each
+     *  try evicts pages the next needs decoded again. Off by default. */
+    void setDecodeOnDraw(bool on) noexcept;
 
     // IOcclusionTester, by FrameContext::occlusion.backend: GL_ANY_SAMPLES_PASSED_CONSERVATIVE
     // queries, pooled, submit() flushes; or (hzb) a depth pyramid of the depth read back when
