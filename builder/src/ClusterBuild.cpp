@@ -25,10 +25,10 @@ ClusterBuildStats& ClusterBuildStats::operator+=(const ClusterBuildStats& other)
 ClusterEncoder::ClusterEncoder(ClusterLimits limits)
     : mLimits(limits) {}
 
-Result<ClusterBuildStats> ClusterEncoder::encode(
+Result<std::size_t> ClusterEncoder::buildMeshlets(
         std::span<const storage::PackedTriangle> triangles,
         const storage::PositionGrid& grid,
-        std::vector<std::byte>& out) {
+        ClusterBuildStats& stats) {
     if (mLimits.maxVertices < 3 || mLimits.maxVertices > storage::kMaxClusterVertices ||
         mLimits.maxTriangles < 4 || mLimits.maxTriangles > storage::kMaxClusterTriangles ||
         mLimits.maxTriangles % 4 != 0)
@@ -37,10 +37,10 @@ Result<ClusterBuildStats> ClusterEncoder::encode(
                 "cluster limits must be 3-255 vertices and 4-512 triangles (a multiple of 4), "
                 "not " + std::to_string(mLimits.maxVertices) +
                         " and " + std::to_string(mLimits.maxTriangles));
-    ClusterBuildStats stats;
     stats.trianglesIn = triangles.size();
+    mMeshlets.clear();
     if (triangles.empty())
-        return stats;
+        return std::size_t{0};
 
     // Every corner as the cluster will store it, so that vertices equal after quantization
     // (and after the normal's rounding to 12 bits) merge.
@@ -82,7 +82,7 @@ Result<ClusterBuildStats> ClusterEncoder::encode(
     }
     stats.trianglesKept = mIndices.size() / 3;
     if (mIndices.empty())
-        return stats;
+        return std::size_t{0};
 
     meshopt_optimizeVertexCache(mIndices.data(), mIndices.data(), mIndices.size(), unique);
     mPositions.resize(unique * 3);
@@ -107,6 +107,28 @@ Result<ClusterBuildStats> ClusterEncoder::encode(
             mLimits.maxVertices,
             mLimits.maxTriangles,
             0.0f);
+    for (std::size_t m = 0; m < count; ++m)
+        mMeshlets.push_back(
+                {meshlets[m].vertex_offset,
+                 meshlets[m].triangle_offset,
+                 meshlets[m].vertex_count,
+                 meshlets[m].triangle_count});
+    return count;
+}
+
+Result<std::uint32_t> ClusterEncoder::countClusters(
+        std::span<const storage::PackedTriangle> triangles, const storage::PositionGrid& grid) {
+    ClusterBuildStats stats;
+    FF_ASSIGN_OR_RETURN(const std::size_t count, buildMeshlets(triangles, grid, stats));
+    return static_cast<std::uint32_t>(count);
+}
+
+Result<ClusterBuildStats> ClusterEncoder::encode(
+        std::span<const storage::PackedTriangle> triangles,
+        const storage::PositionGrid& grid,
+        std::vector<std::byte>& out) {
+    ClusterBuildStats stats;
+    FF_ASSIGN_OR_RETURN(const std::size_t count, buildMeshlets(triangles, grid, stats));
 
     std::array<storage::ClusterVertex, storage::kMaxClusterVertices> local{};
     std::array<storage::ClusterVertex, storage::kMaxClusterVertices> ordered{};
@@ -114,29 +136,29 @@ Result<ClusterBuildStats> ClusterEncoder::encode(
     std::array<unsigned int, storage::kMaxClusterVertices> fetchRemap{};
     std::array<std::uint8_t, storage::kMaxClusterTriangles * 3> narrow{};
     for (std::size_t m = 0; m < count; ++m) {
-        const meshopt_Meshlet& meshlet = meshlets[m];
-        for (std::size_t v = 0; v < meshlet.vertex_count; ++v)
-            local[v] = mVertices[mMeshletVertices[meshlet.vertex_offset + v]];
-        const std::size_t indexCount = std::size_t{meshlet.triangle_count} * 3;
+        const Meshlet& meshlet = mMeshlets[m];
+        for (std::size_t v = 0; v < meshlet.vertexCount; ++v)
+            local[v] = mVertices[mMeshletVertices[meshlet.vertexOffset + v]];
+        const std::size_t indexCount = std::size_t{meshlet.triangleCount} * 3;
         for (std::size_t i = 0; i < indexCount; ++i)
-            localIndices[i] = mMeshletTriangles[meshlet.triangle_offset + i];
+            localIndices[i] = mMeshletTriangles[meshlet.triangleOffset + i];
         // The index codec wants triangles in vertex-cache order and vertices in order of first
         // use: it then spends about a byte a triangle.
         meshopt_optimizeVertexCache(
-                localIndices.data(), localIndices.data(), indexCount, meshlet.vertex_count);
+                localIndices.data(), localIndices.data(), indexCount, meshlet.vertexCount);
         const std::size_t used = meshopt_optimizeVertexFetchRemap(
-                fetchRemap.data(), localIndices.data(), indexCount, meshlet.vertex_count);
+                fetchRemap.data(), localIndices.data(), indexCount, meshlet.vertexCount);
         meshopt_remapVertexBuffer(
                 ordered.data(),
                 local.data(),
-                meshlet.vertex_count,
+                meshlet.vertexCount,
                 sizeof(storage::ClusterVertex),
                 fetchRemap.data());
         for (std::size_t i = 0; i < indexCount; ++i)
             narrow[i] = static_cast<std::uint8_t>(fetchRemap[localIndices[i]]);
 
         const std::size_t start = out.size();
-        out.resize(start + storage::encodedClusterBound(used, meshlet.triangle_count));
+        out.resize(start + storage::encodedClusterBound(used, meshlet.triangleCount));
         FF_ASSIGN_OR_RETURN(
                 const std::size_t written,
                 storage::encodeCluster(

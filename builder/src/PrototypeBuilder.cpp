@@ -1,8 +1,8 @@
 #include "PrototypeBuilder.h"
 
+#include "ClusterNodes.h"
 #include "Decomposition.h"
 #include "HierarchyBuild.h"
-#include "LeafCollapse.h"
 #include "LevelRegions.h"
 #include "LevelRegionsV2.h"
 #include "Morton.h"
@@ -20,6 +20,16 @@
 namespace ff::builder {
 
 namespace {
+
+LeafShapeV2 leafShapeV2(const HierarchyParams& params, const storage::PositionGrid& grid, unsigned threads) {
+    LeafShapeV2 shape;
+    shape.leafTriangles = params.clusterLeafTriangles;
+    shape.clusterNodes = params.clusterNodes;
+    shape.grid = &grid;
+    shape.bakeResolution = params.bakeResolution;
+    shape.threads = threads;
+    return shape;
+}
 
 struct ChunkOutput {
     LevelledSubtree encoded;
@@ -96,7 +106,7 @@ Result<ChunkOutput> buildChunk(
     out.summary = std::move(built.summary);
     out.leafNodes = built.leafNodes;
     if (positionGrid != nullptr)
-        collapseSmallSubtrees(built.nodes, triangles, params.clusterLeafTriangles);
+        FF_RETURN_IF_ERROR(shapeLeavesV2(built.nodes, triangles, leafShapeV2(params, *positionGrid, 1)));
     out.encoded = encodeLevels(std::move(built.nodes), std::move(triangles));
     if (positionGrid != nullptr) {
         FF_ASSIGN_OR_RETURN(ChunkClustersV2 clusters, encodeChunkClusters(out.encoded, *positionGrid));
@@ -210,8 +220,8 @@ Result<PrototypeBuildResult> PrototypeBuilder::writeInMemoryV2(
     input.prototype = encoding.storedIndex;
     input.grid = &encoding.grid;
     input.rootParent = {{boundsMin.x, boundsMin.y, boundsMin.z}, {boundsMax.x, boundsMax.y, boundsMax.z}};
-    input.leafTriangles = mParams.clusterLeafTriangles;
     input.threads = mThreads;
+    FF_RETURN_IF_ERROR(shapeLeavesV2(built.nodes, all, leafShapeV2(mParams, encoding.grid, mThreads)));
     PrototypeBuildResult result;
     result.summary = std::move(built.summary);
     FF_ASSIGN_OR_RETURN(
@@ -246,7 +256,7 @@ Result<PrototypeBuildResult> PrototypeBuilder::finishChunkedV2(
     // The records below the chunk roots are stored relative to the roots' decoded bounds, so
     // the tree above the chunks is settled (its small subtrees made leaves) before they are
     // written, and written after them (it names where their children went).
-    collapseSmallSubtrees(nodes, ownTriangles, mParams.clusterLeafTriangles);
+    FF_RETURN_IF_ERROR(shapeLeavesV2(nodes, ownTriangles, leafShapeV2(mParams, encoding.grid, mThreads)));
     const glm::vec3 boundsMin = nodes[0].boundsMin;
     const glm::vec3 boundsMax = nodes[0].boundsMax;
     const storage::NodeBox rootParent{{boundsMin.x, boundsMin.y, boundsMin.z}, {boundsMax.x, boundsMax.y, boundsMax.z}};
@@ -267,7 +277,6 @@ Result<PrototypeBuildResult> PrototypeBuilder::finishChunkedV2(
     input.prototype = encoding.storedIndex;
     input.grid = &encoding.grid;
     input.rootParent = rootParent;
-    input.leafTriangles = mParams.clusterLeafTriangles;
     input.placed = placed;
     FF_ASSIGN_OR_RETURN(
             const SubtreeV2Result written,

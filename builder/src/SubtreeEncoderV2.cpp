@@ -1,16 +1,14 @@
 #include "SubtreeEncoderV2.h"
 
 #include "ClusterPagePacker.h"
-#include "LeafCollapse.h"
+#include "ParallelFor.h"
 
 #include <ff/builder/ColorCube.h>
 #include <ff/storage/Assert.h>
 #include <ff/storage/NodePageV2.h>
 
 #include <algorithm>
-#include <atomic>
 #include <cmath>
-#include <future>
 #include <string>
 #include <unordered_map>
 
@@ -77,7 +75,7 @@ struct EncodedPayload {
 };
 
 /** Encodes the nodes at positions `work` of `order` into `out` (by position) on `threads`
- *  threads, each taking the next node as it finishes one. */
+ *  threads. */
 Status encodePayloads(
         const std::vector<BuildNode>& nodes,
         const std::vector<std::uint32_t>& order,
@@ -86,10 +84,8 @@ Status encodePayloads(
         const storage::PositionGrid& grid,
         unsigned threads,
         std::vector<EncodedPayload>& out) {
-    std::atomic<std::size_t> next{0};
-    const auto worker = [&]() -> Status {
-        ClusterEncoder encoder;
-        for (std::size_t k = next++; k < work.size(); k = next++) {
+    return parallelFor(work.size(), threads, [&] {
+        return [&, encoder = ClusterEncoder()](std::size_t k) mutable -> Status {
             const BuildNode& node = nodes[order[work[k]]];
             EncodedPayload& payload = out[work[k]];
             FF_ASSIGN_OR_RETURN(
@@ -98,23 +94,9 @@ Status encodePayloads(
                             triangles.subspan(node.firstTriangle, node.triangleCount),
                             grid,
                             payload.bytes));
-        }
-        return Status::ok();
-    };
-    const unsigned helpers = std::min<unsigned>(
-                                     std::max(threads, 1u),
-                                     static_cast<unsigned>(std::max<std::size_t>(work.size(), 1))) -
-                             1;
-    std::vector<std::future<Status>> running;
-    for (unsigned t = 0; t < helpers; ++t)
-        running.push_back(std::async(std::launch::async, worker));
-    Status status = worker();
-    for (auto& r : running) {
-        Status s = r.get();
-        if (status.isOk())
-            status = std::move(s);
-    }
-    return status;
+            return Status::ok();
+        };
+    });
 }
 
 /** Where a node goes: a page of this subtree (from 0) and a slot in it. */
@@ -169,7 +151,7 @@ Result<SubtreeV2Result> writeSubtreeV2(
         storage::SceneWriter& writer,
         NodePageTable& table,
         std::vector<BuildNode> nodes,
-        std::span<storage::PackedTriangle> triangles,
+        std::span<const storage::PackedTriangle> triangles,
         const SubtreeV2Input& input) {
     FF_ASSERT(!nodes.empty());
     std::unordered_map<std::uint32_t, const PlacedNodeV2*> placed;
@@ -179,8 +161,6 @@ Result<SubtreeV2Result> writeSubtreeV2(
         if (placedElsewhere(nodes[n]) && placed.count(static_cast<std::uint32_t>(n)) == 0)
             return Status(ErrorCode::Internal, "a node placed elsewhere without its placement");
     const bool hasGeometry = input.grid != nullptr;
-    if (hasGeometry)
-        collapseSmallSubtrees(nodes, triangles, input.leafTriangles);
     const Tree tree = breadthFirst(nodes);
     SubtreeV2Result result;
 

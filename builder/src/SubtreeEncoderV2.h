@@ -64,9 +64,6 @@ struct SubtreeV2Input {
     /** What the root's bounds are stored relative to: the prototype record's bounds, or the
      *  header's for the instance level. Must hold the root's bounds. */
     storage::NodeBox rootParent;
-    /** Subtrees of at most this many triangles become one leaf: a leaf is whole clusters, and
-     *  a node costs a 48-byte record (0: keep the hierarchy's leaves). */
-    std::uint64_t leafTriangles = 0;
     /** Per instance index, the triangles an Instance node draws (its prototype's). */
     std::span<const std::uint64_t> instanceTriangles;
     /** Every node with placedChildren or placedTriangles, resolved. */
@@ -104,8 +101,8 @@ storage::NodeBox boundsInside(
 /**
  * Writes the hierarchy `nodes` (nodes[0] the root, children contiguous and after their parents;
  * the nodes with placedChildren or placedTriangles resolved in input.placed) over `triangles`
- * (each node's own run at [firstTriangle, +triangleCount); reordered when small subtrees become
- * leaves, collapseSmallSubtrees): geometry pages first, in the nodes' breadth-first
+ * (each node's own run at [firstTriangle, +triangleCount); its leaves shaped for format 2
+ * already, shapeLeavesV2): geometry pages first, in the nodes' breadth-first
  * order, then node records of whole sibling blocks in the same order into `table`'s pages
  * (from its open page on; the last is left open), each page's records with their
  * representations. Deterministic.
@@ -114,7 +111,7 @@ storage::NodeBox boundsInside(
         storage::SceneWriter& writer,
         NodePageTable& table,
         std::vector<BuildNode> nodes,
-        std::span<storage::PackedTriangle> triangles,
+        std::span<const storage::PackedTriangle> triangles,
         const SubtreeV2Input& input);
 
 } // namespace ff::builder

@@ -1,5 +1,5 @@
 #include <ff/builder/ClusterBuild.h>
-#include "RecordingSink.h"
+#include "GeneratedTriangles.h"
 
 #include <ff/builder/Generators.h>
 #include <ff/storage/ClusterCodec.h>
@@ -18,17 +18,7 @@
 namespace ff::builder {
 namespace {
 
-using testing::RecordingSink;
-
-std::vector<storage::PackedTriangle> generate(const std::string& text) {
-    auto spec = parseGeneratorSpec(text);
-    EXPECT_TRUE(spec.isOk());
-    RecordingSink sink;
-    const auto report = runGenerator(*spec, sink);
-    EXPECT_TRUE(report.isOk()) << report.status().toString();
-    return sink.prototypes().empty() ? std::vector<storage::PackedTriangle>{}
-                                     : sink.prototypes()[0].triangles;
-}
+using testing::generatedTriangles;
 
 storage::PositionGrid gridOver(std::span<const storage::PackedTriangle> triangles) {
     std::array<float, 3> lo{INFINITY, INFINITY, INFINITY};
@@ -123,7 +113,7 @@ expected(std::span<const storage::PackedTriangle> triangles, const storage::Posi
 TEST(ClusterBuildTest, TerrainAndSphereComeBackAsQuantizedInUnderEightBytesATriangle) {
     for (const char* scene : {"terrain:triangles=200000", "sphere:triangles=100000"}) {
         SCOPED_TRACE(scene);
-        const auto triangles = generate(scene);
+        const auto triangles = generatedTriangles(scene);
         ASSERT_FALSE(triangles.empty());
         const storage::PositionGrid grid = gridOver(triangles);
         ClusterEncoder encoder;
@@ -165,7 +155,7 @@ TEST(ClusterBuildTest, TerrainAndSphereComeBackAsQuantizedInUnderEightBytesATria
 }
 
 TEST(ClusterBuildTest, TheSameTrianglesGiveTheSameBytes) {
-    const auto triangles = generate("sphere:triangles=5000");
+    const auto triangles = generatedTriangles("sphere:triangles=5000");
     const storage::PositionGrid grid = gridOver(triangles);
     std::vector<std::byte> a;
     std::vector<std::byte> b;
@@ -179,10 +169,28 @@ TEST(ClusterBuildTest, TheSameTrianglesGiveTheSameBytes) {
     EXPECT_EQ(a, b);
 }
 
+// Cluster nodes (builder/src/ClusterNodes.h) give a leaf as many children as it has clusters.
+TEST(ClusterBuildTest, CountClustersIsWhatEncodeMakes) {
+    for (const char* scene : {"terrain:triangles=20000", "sphere:triangles=8000"}) {
+        SCOPED_TRACE(scene);
+        const auto triangles = generatedTriangles(scene);
+        const storage::PositionGrid grid = gridOver(triangles);
+        ClusterEncoder encoder;
+        std::vector<std::byte> bytes;
+        const auto stats = encoder.encode(triangles, grid, bytes);
+        ASSERT_TRUE(stats.isOk());
+        const auto count = encoder.countClusters(triangles, grid);
+        ASSERT_TRUE(count.isOk());
+        EXPECT_EQ(*count, stats->clusters);
+        EXPECT_GT(*count, 10u);
+        EXPECT_EQ(*encoder.countClusters({}, grid), 0u);
+    }
+}
+
 // A triangle smaller than a grid step collapses onto fewer than three grid points: dropped,
 // counted, and the rest still encode.
 TEST(ClusterBuildTest, TrianglesQuantizationCollapsesAreDropped) {
-    auto triangles = generate("sphere:triangles=500");
+    auto triangles = generatedTriangles("sphere:triangles=500");
     storage::PackedTriangle tiny = triangles[0];
     tiny.vertices[1].position = tiny.vertices[0].position;
     tiny.vertices[1].position[0] += 1e-7f;
@@ -199,7 +207,7 @@ TEST(ClusterBuildTest, TrianglesQuantizationCollapsesAreDropped) {
 }
 
 TEST(ClusterBuildTest, LimitsOutsideMeshoptimizersAreRefused) {
-    const auto triangles = generate("sphere:triangles=100");
+    const auto triangles = generatedTriangles("sphere:triangles=100");
     const storage::PositionGrid grid = gridOver(triangles);
     std::vector<std::byte> bytes;
     EXPECT_FALSE(ClusterEncoder({256, 256}).encode(triangles, grid, bytes).isOk());

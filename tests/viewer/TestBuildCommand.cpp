@@ -3,6 +3,8 @@
 
 #include "FarfieldProcess.h"
 
+#include <ff/runtime/ImageMetrics.h>
+
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -173,6 +175,48 @@ TEST(BuildCommandTest, FormatTwoIsCheckedAndDrawn) {
     EXPECT_GT(smallFrame.at("pages_decoded_on_draw").get<std::uint64_t>(), 0u);
     EXPECT_EQ(frame.at("pages_decoded_on_draw").get<std::uint64_t>(), 0u);
     EXPECT_EQ(differingPixels(decodeImage(dir / "skull.png"), decodeImage(dir / "small.png")), 0u);
+}
+
+// --cluster-nodes: from far enough that a leaf covers a few pixels, its cluster pieces are drawn
+// as cubes instead of all its triangles; up close and at ε = 0 every triangle is still drawn.
+TEST(BuildCommandTest, ClusterNodesLetTheCutStopInsideALeaf) {
+    const fs::path dir = freshTestDir();
+    const std::vector<std::string> terrain = {"--generate", "terrain:triangles=200000", "--format", "2"};
+    std::vector<std::string> withNodes = terrain;
+    withNodes.push_back("--cluster-nodes");
+    ASSERT_TRUE(exitedWith(build(dir, terrain, dir / "leaves.ffs"), 0));
+    ASSERT_TRUE(exitedWith(build(dir, withNodes, dir / "nodes.ffs"), 0));
+    const json leaves = readJsonFile(dir / "leaves.json");
+    const json nodes = readJsonFile(dir / "nodes.json");
+    EXPECT_GT(nodes.at("nodes").get<std::uint64_t>(), 4 * leaves.at("nodes").get<std::uint64_t>());
+    EXPECT_EQ(nodes.at("stored_triangles"), leaves.at("stored_triangles"));
+    const ProcessResult checked = runFarfield({"check", (dir / "nodes.ffs").string()}, dir);
+    EXPECT_TRUE(exitedWith(checked, 0)) << checked.describe();
+
+    const auto frame = [&](const std::string& scene, const std::string& epsilon, const std::string& distance) {
+        const std::string stem = scene + "-" + epsilon + "-" + distance;
+        const ProcessResult r = runFarfield(
+                {"render", (dir / (scene + ".ffs")).string(), "-o", (dir / (stem + ".png")).string(), "--epsilon",
+                 epsilon, "--distance", distance, "--elevation", "60", "--stats", (dir / (stem + ".json")).string()},
+                dir);
+        EXPECT_TRUE(exitedWith(r, 0)) << r.describe();
+        return readJsonFile(dir / (stem + ".json")).at("frames").back();
+    };
+    const std::uint64_t stored = nodes.at("stored_triangles").get<std::uint64_t>();
+    EXPECT_EQ(frame("nodes", "0", "40").at("triangles_drawn").get<std::uint64_t>(), stored);
+    EXPECT_EQ(frame("nodes", "1", "3").at("triangles_drawn").get<std::uint64_t>(),
+              frame("leaves", "1", "3").at("triangles_drawn").get<std::uint64_t>());
+    // 40 radii away a leaf covers a few pixels, its pieces about one: format 2's plain leaves are
+    // drawn whole, the pieces as cubes.
+    const json far = frame("nodes", "1", "40");
+    const json farLeaves = frame("leaves", "1", "40");
+    EXPECT_GT(farLeaves.at("triangles_drawn").get<std::uint64_t>(), stored / 2);
+    EXPECT_LT(far.at("triangles_drawn").get<std::uint64_t>() * 100, farLeaves.at("triangles_drawn").get<std::uint64_t>());
+    EXPECT_GT(far.at("cubes_drawn").get<std::uint64_t>(), 10 * farLeaves.at("cubes_drawn").get<std::uint64_t>());
+    const Result<runtime::ColorError> error =
+            runtime::colorError(decodeImage(dir / "nodes-1-40.png"), decodeImage(dir / "nodes-0-40.png"));
+    ASSERT_TRUE(error.isOk()) << error.status().message();
+    EXPECT_GE(error->psnrSrgb, 40.0) << "the pieces' cubes against every triangle";
 }
 
 // ------------------------------------------------------------------------------------------

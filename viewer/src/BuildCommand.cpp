@@ -43,6 +43,7 @@ struct BuildArgs {
     std::string spill = "compact";
     unsigned format = 1;
     std::uint64_t clusterLeafTriangles = 4096;
+    bool clusterNodes = false;
     bool quiet = false;
 };
 
@@ -82,6 +83,7 @@ int runBuild(const BuildArgs& args) {
     options.spillCodec = *spill;
     options.formatVersion = args.format;
     options.hierarchy.clusterLeafTriangles = args.clusterLeafTriangles;
+    options.hierarchy.clusterNodes = args.clusterNodes;
     options.hierarchy.bakeResolution = args.bakeResolution;
     options.hierarchy.bakeInnerDirect = args.bakeInner == "direct";
     options.hierarchy.cubeCost = args.cubeCost;
@@ -218,6 +220,9 @@ CommandRunner addBuildCommand(CLI::App& app) {
     cmd->add_option("--cluster-leaf-triangles", args->clusterLeafTriangles,
                     "--format 2: subtrees of at most this many triangles become one leaf of whole clusters (0: keep the leaves)")
             ->capture_default_str();
+    cmd->add_flag("--cluster-nodes", args->clusterNodes,
+                  "--format 2: give each leaf a node per cluster, with its own bounds and cube, so the cut can stop inside "
+                  "a leaf: far views draw far fewer triangles, for ~0.4-0.9 bytes a triangle more (docs/results)");
     cmd->add_flag("-q,--quiet", args->quiet, "No progress or summary on stderr");
     return [args]() { return runBuild(*args); };
 }

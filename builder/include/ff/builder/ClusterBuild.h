@@ -49,13 +49,33 @@ public:
            const storage::PositionGrid& grid,
            std::vector<std::byte>& out);
 
+    /** How many clusters encode() makes of `triangles`, without encoding them. */
+    [[nodiscard]] Result<std::uint32_t>
+    countClusters(std::span<const storage::PackedTriangle> triangles, const storage::PositionGrid& grid);
+
 private:
+    /** Quantizes and merges the corners, drops collapsed triangles and splits the rest into
+     *  meshlets (mMeshlets, mMeshletVertices, mMeshletTriangles). Returns the meshlet count. */
+    [[nodiscard]] Result<std::size_t>
+    buildMeshlets(std::span<const storage::PackedTriangle> triangles,
+                  const storage::PositionGrid& grid,
+                  ClusterBuildStats& stats);
+
+    /** A meshlet's ranges in mMeshletVertices and mMeshletTriangles. */
+    struct Meshlet {
+        std::uint32_t vertexOffset = 0;
+        std::uint32_t triangleOffset = 0;
+        std::uint32_t vertexCount = 0;
+        std::uint32_t triangleCount = 0;
+    };
+
     ClusterLimits mLimits;
     std::vector<storage::ClusterVertex> mCorners;
     std::vector<unsigned int> mRemap;
     std::vector<storage::ClusterVertex> mVertices;
     std::vector<float> mPositions;
     std::vector<unsigned int> mIndices;
+    std::vector<Meshlet> mMeshlets;
     std::vector<unsigned int> mMeshletVertices;
     std::vector<unsigned char> mMeshletTriangles;
 };
