@@ -37,22 +37,29 @@ std::vector<std::uint32_t> splittableLeaves(const std::vector<BuildNode>& nodes)
     return leaves;
 }
 
-/** Reorders `run` into `parts` groups, each a slab of the one before it was cut from (the longest
- *  axis of the centroids, cut in proportion to the parts on each side): as equal in triangles
- *  as the parts allow and spatially compact, so a group's box is mostly covered and its cube
- *  opaque where the surface is. Appends the group sizes in order. */
-void splitSpatially(
-        std::span<storage::PackedTriangle> run,
-        std::uint32_t parts,
-        std::vector<std::uint64_t>& sizes) {
-    parts = static_cast<std::uint32_t>(std::min<std::uint64_t>(parts, run.size()));
-    if (parts <= 1) {
-        sizes.push_back(run.size());
+/** A stretch of a leaf's run that becomes a node: `parts` pieces of about a cluster. */
+struct Group {
+    std::uint64_t start = 0; ///< into the leaf's run
+    std::uint64_t size = 0;
+    std::uint32_t parts = 1;
+};
+
+/** Reorders the triangles of `groups` (consecutive in `run`, from `start`) so each group is a
+ *  slab of the stretch it was cut from — the longest axis of the centroids, cut in proportion to
+ *  the parts on each side — then gives each group its size: as equal in triangles as the parts
+ *  allow and spatially compact, so a group's box is mostly covered and its cube opaque where
+ *  the surface is. */
+void cutIntoSlabs(
+        std::span<storage::PackedTriangle> run, std::uint64_t start, std::span<Group> groups) {
+    std::uint64_t total = 0;
+    for (const Group& g : groups)
+        total += g.parts;
+    const auto stretch = run.subspan(start, groups.front().size);
+    if (groups.size() == 1)
         return;
-    }
     glm::vec3 lo(std::numeric_limits<float>::max());
     glm::vec3 hi(std::numeric_limits<float>::lowest());
-    for (const storage::PackedTriangle& t : run) {
+    for (const storage::PackedTriangle& t : stretch) {
         const glm::vec3 c = centroid(t);
         lo = glm::min(lo, c);
         hi = glm::max(hi, c);
@@ -60,22 +67,56 @@ void splitSpatially(
     const glm::vec3 extent = hi - lo;
     const int axis =
             extent.x >= extent.y && extent.x >= extent.z ? 0 : (extent.y >= extent.z ? 1 : 2);
-    const std::uint32_t left = parts / 2;
-    const std::size_t cut = run.size() * left / parts;
+    const std::size_t half = groups.size() / 2;
+    std::uint64_t leftParts = 0;
+    for (std::size_t g = 0; g < half; ++g)
+        leftParts += groups[g].parts;
+    // Each side keeps at least a triangle per group, so no node is empty.
+    const std::uint64_t cut = std::clamp<std::uint64_t>(
+            stretch.size() * leftParts / total, half, stretch.size() - (groups.size() - half));
     std::nth_element(
-            run.begin(),
-            run.begin() + static_cast<std::ptrdiff_t>(cut),
-            run.end(),
+            stretch.begin(),
+            stretch.begin() + static_cast<std::ptrdiff_t>(cut),
+            stretch.end(),
             [axis](const storage::PackedTriangle& a, const storage::PackedTriangle& b) {
                 return centroid(a)[axis] < centroid(b)[axis];
             });
-    splitSpatially(run.first(cut), left, sizes);
-    splitSpatially(run.subspan(cut), parts - left, sizes);
+    groups.front().size = cut;
+    groups[half].size = stretch.size() - cut;
+    cutIntoSlabs(run, start, groups.first(half));
+    cutIntoSlabs(run, start + cut, groups.subspan(half));
 }
 
-/** Splits one leaf's run: reorders it into spatially compact groups, as many as the clusters it
- *  encodes to (at most kMaxClusterChildren), and returns a child per group (none when it is one
- *  cluster). Touches only `run`. */
+/** Splits `group` into at most kClusterNodeBranching groups of as equal parts as they can be,
+ *  reordering its triangles (cutIntoSlabs). */
+std::vector<Group> splitGroup(std::span<storage::PackedTriangle> run, const Group& group) {
+    const std::uint32_t ways = std::min(
+            {group.parts,
+             kClusterNodeBranching,
+             static_cast<std::uint32_t>(std::min<std::uint64_t>(group.size, 0xFFFFFFFFu))});
+    std::vector<Group> groups(ways);
+    for (std::uint32_t g = 0; g < ways; ++g)
+        groups[g].parts = group.parts / ways + (g < group.parts % ways ? 1 : 0);
+    groups.front().size = group.size;
+    cutIntoSlabs(run, group.start, groups);
+    std::uint64_t start = group.start;
+    for (Group& g : groups) {
+        g.start = start;
+        start += g.size;
+    }
+    return groups;
+}
+
+/** The nodes below a split leaf, breadth first: the leaf's own `direct` children first, then
+ *  theirs; `firstChild` counts from the front of `nodes`. */
+struct SplitTree {
+    std::vector<BuildNode> nodes;
+    std::uint32_t direct = 0;
+};
+
+/** Splits one leaf's run into a tree of nodes below it, each at most kClusterNodeBranching
+ *  children wide, whose leaves are spatially compact pieces of about a cluster, as many as the
+ *  clusters the run encodes to (none when it is one cluster). Touches only `run`. */
 class LeafSplitter {
 public:
     explicit LeafSplitter(const LeafShapeV2& shape)
@@ -83,44 +124,66 @@ public:
         , mEncoder(shape.limits)
         , mBaker(shape.bakeResolution) {}
 
-    Result<std::vector<BuildNode>>
+    Result<SplitTree>
     split(const BuildNode& leaf, std::span<storage::PackedTriangle> run) {
         FF_ASSIGN_OR_RETURN(
                 const std::uint32_t clusters, mEncoder.countClusters(run, *mShape.grid));
         if (clusters <= 1)
-            return std::vector<BuildNode>{};
-        mSizes.clear();
-        splitSpatially(run, std::min(clusters, kMaxClusterChildren), mSizes);
-
-        std::vector<BuildNode> children(mSizes.size());
-        std::uint64_t start = 0;
-        for (std::size_t c = 0; c < children.size(); ++c) {
-            BuildNode& child = children[c];
-            const auto own = run.subspan(start, mSizes[c]);
-            child.boundsMin = glm::vec3(std::numeric_limits<float>::max());
-            child.boundsMax = glm::vec3(std::numeric_limits<float>::lowest());
-            for (const storage::PackedTriangle& t : own)
-                growBounds(child.boundsMin, child.boundsMax, t);
-            child.cellMin = child.boundsMin;
-            child.cellMax = child.boundsMax;
-            mBaker.reset(child.boundsMin, child.boundsMax);
-            mBaker.addTriangles(own);
-            child.cube = mBaker.finish();
-            FF_ASSERT(leaf.level < 255);
-            child.level = static_cast<std::uint8_t>(leaf.level + 1);
-            child.kind = static_cast<std::uint8_t>(storage::NodeKind::Cell);
-            child.firstTriangle = leaf.firstTriangle + start;
-            child.triangleCount = own.size();
-            start += own.size();
+            return SplitTree{};
+        SplitTree out;
+        std::vector<BuildNode>& tree = out.nodes;
+        std::vector<Group> groups; // tree[i] is groups[i]
+        const auto addChildren = [&](const Group& parent, std::uint8_t parentLevel) {
+            FF_ASSERT(parentLevel < 255);
+            for (const Group& g : splitGroup(run, parent)) {
+                groups.push_back(g);
+                tree.push_back(node(leaf, run, g, static_cast<std::uint8_t>(parentLevel + 1)));
+            }
+        };
+        addChildren({0, run.size(), clusters}, leaf.level);
+        out.direct = static_cast<std::uint32_t>(tree.size());
+        for (std::size_t i = 0; i < tree.size(); ++i) {
+            if (groups[i].parts <= 1)
+                continue;
+            tree[i].firstChild = static_cast<std::uint32_t>(tree.size());
+            tree[i].triangleCount = 0;
+            const Group group = groups[i];
+            const std::uint8_t level = tree[i].level;
+            addChildren(group, level);
+            tree[i].childCount = static_cast<std::uint32_t>(tree.size()) - tree[i].firstChild;
         }
-        return children;
+        return out;
     }
 
 private:
+    /** The node of `group`: its bounds, its cube baked on them, its triangles (kept when it
+     *  becomes a parent: cubes of inner nodes are baked before they are split further). */
+    BuildNode node(
+            const BuildNode& leaf,
+            std::span<const storage::PackedTriangle> run,
+            const Group& group,
+            std::uint8_t level) {
+        BuildNode out;
+        const auto own = run.subspan(group.start, group.size);
+        out.boundsMin = glm::vec3(std::numeric_limits<float>::max());
+        out.boundsMax = glm::vec3(std::numeric_limits<float>::lowest());
+        for (const storage::PackedTriangle& t : own)
+            growBounds(out.boundsMin, out.boundsMax, t);
+        out.cellMin = out.boundsMin;
+        out.cellMax = out.boundsMax;
+        mBaker.reset(out.boundsMin, out.boundsMax);
+        mBaker.addTriangles(own);
+        out.cube = mBaker.finish();
+        out.level = level;
+        out.kind = static_cast<std::uint8_t>(storage::NodeKind::Cell);
+        out.firstTriangle = leaf.firstTriangle + group.start;
+        out.triangleCount = own.size();
+        return out;
+    }
+
     const LeafShapeV2& mShape;
     ClusterEncoder mEncoder;
     CubeBaker mBaker;
-    std::vector<std::uint64_t> mSizes;
 };
 
 } // namespace
@@ -136,12 +199,12 @@ Result<std::uint64_t> splitLeavesIntoClusters(
     const std::vector<std::uint32_t> leaves = splittableLeaves(nodes);
     // Each leaf's run is its own (LeafCollapse.h), so leaves split in parallel; the children
     // are appended afterwards in the leaves' order.
-    std::vector<std::vector<BuildNode>> children(leaves.size());
+    std::vector<SplitTree> below(leaves.size());
     FF_RETURN_IF_ERROR(parallelFor(leaves.size(), shape.threads, [&] {
         return [&, splitter = LeafSplitter(shape)](std::size_t k) mutable -> Status {
             const BuildNode& leaf = nodes[leaves[k]];
             FF_ASSIGN_OR_RETURN(
-                    children[k],
+                    below[k],
                     splitter.split(
                             leaf, triangles.subspan(leaf.firstTriangle, leaf.triangleCount)));
             return Status::ok();
@@ -149,16 +212,21 @@ Result<std::uint64_t> splitLeavesIntoClusters(
     }));
     std::uint64_t split = 0;
     for (std::size_t k = 0; k < leaves.size(); ++k) {
-        if (children[k].empty())
+        std::vector<BuildNode>& tree = below[k].nodes;
+        if (tree.empty())
             continue;
-        if (nodes.size() + children[k].size() > 0xFFFFFFFFull)
+        if (nodes.size() + tree.size() > 0xFFFFFFFFull)
             return Status(ErrorCode::Unsupported, "a hierarchy of more than 2^32 nodes");
+        const auto base = static_cast<std::uint32_t>(nodes.size());
+        for (BuildNode& node : tree)
+            if (node.childCount > 0)
+                node.firstChild += base;
         BuildNode& leaf = nodes[leaves[k]];
-        leaf.firstChild = static_cast<std::uint32_t>(nodes.size());
-        leaf.childCount = static_cast<std::uint32_t>(children[k].size());
+        leaf.firstChild = base;
+        leaf.childCount = below[k].direct;
         leaf.octreeChildren = false;
         leaf.triangleCount = 0;
-        nodes.insert(nodes.end(), children[k].begin(), children[k].end());
+        nodes.insert(nodes.end(), tree.begin(), tree.end());
         ++split;
     }
     return split;

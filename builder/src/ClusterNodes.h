@@ -1,11 +1,12 @@
 #pragma once
 
 // Format 2's leaves are whole clusters (LeafCollapse.h), so a leaf of thousands of triangles
-// would refine from its one cube straight to all of them. A child per cluster, with its own
-// bounds and color cube, lets the cut stop inside the leaf: a piece is drawn where its box is
-// larger than ε on screen, its cube where it is not. The pieces are cut in space (slabs of the
-// leaf's centroids), not taken from the meshlet builder, whose meshlets can be scattered
-// enough to leave their boxes' cubes half transparent; each encodes to one or two clusters.
+// would refine from its one cube straight to all of them. A node per cluster, with its own
+// bounds and color cube, under a small tree of nodes over groups of them, lets the cut stop
+// inside the leaf: a piece is drawn where its box is larger than ε on screen, its cube where it
+// is not. The pieces are cut in space (slabs of the leaf's centroids), not taken from the
+// meshlet builder, whose meshlets can be scattered enough to leave their boxes' cubes half
+// transparent; each encodes to one or two clusters.
 
 #include "OctreeBuilder.h"
 
@@ -32,16 +33,20 @@ struct LeafShapeV2 {
     unsigned threads = 1;
 };
 
-/** A node has at most this many children (the record's child count is a byte). */
-inline constexpr std::uint32_t kMaxClusterChildren = 255;
+/** The nodes below a split leaf have at most this many children. Four, as a terrain's octree
+ *  has: with many more, a node just over ε on screen would refine into children far below it
+ *  (a leaf of 23 clusters at 1.3 px into cubes of 0.3 px), and a far view would read and draw
+ *  a record for every fraction of a pixel. */
+inline constexpr std::uint32_t kClusterNodeBranching = 4;
 
 /**
  * Gives every reachable Cell leaf with triangles of its own (not placed elsewhere) whose
- * triangles form more than one cluster as many children as clusters (at most
- * kMaxClusterChildren), appended to `nodes`: spatially compact pieces of its triangles, each
- * with their bounds and cube, one level below the leaf, which keeps its cube and gives up its
- * triangles. Each split leaf's run of `triangles` is reordered piece by piece. Deterministic
- * whatever `shape.threads`. Returns the leaves split.
+ * triangles form more than one cluster a tree of nodes below it, at most
+ * kClusterNodeBranching children wide, appended to `nodes`: its leaves are spatially compact
+ * pieces of the triangles, as many as clusters, and every node has its bounds and a cube baked
+ * on them; the split leaf keeps its cube and gives up its triangles. Each split leaf's run of
+ * `triangles` is reordered piece by piece. Deterministic whatever `shape.threads`. Returns the
+ * leaves split.
  */
 [[nodiscard]] Result<std::uint64_t> splitLeavesIntoClusters(
         std::vector<BuildNode>& nodes,

@@ -1,6 +1,6 @@
-// Cluster nodes (builder/src/ClusterNodes.h): format 2's leaves get a child per cluster, so a cut
-// can stop inside a leaf. Every triangle stays reachable exactly once, each child is a compact
-// piece of about a cluster inside its leaf's bounds with an opaque cube of its own, and the
+// Cluster nodes (builder/src/ClusterNodes.h): format 2's leaves get a tree of nodes over their
+// clusters, so a cut can stop inside a leaf. Every triangle stays reachable exactly once, each
+// piece is about a cluster inside its parent's bounds with an opaque cube of its own, and the
 // result does not depend on the threads.
 
 #include "ClusterNodes.h"
@@ -128,23 +128,45 @@ TEST(ClusterNodesTest, WithoutClusterNodesALeafDrawsAllItsClusters) {
     EXPECT_GT(multiCluster, 0u);
 }
 
-TEST(ClusterNodesTest, ALeafOfMoreClustersThanAByteCountsSharesChildren) {
-    // The whole terrain one leaf: ~330 clusters, at most 255 children of about one or two each.
+TEST(ClusterNodesTest, ALeafOfManyClustersBecomesAFourWayTree) {
+    // The whole terrain one leaf: ~330 clusters under a tree at most four wide, whose inner nodes
+    // draw nothing of their own but show their part of the terrain with their cubes.
     const Shaped s = shape("terrain:triangles=60000", 1u << 20, true, 1);
-    const BuildNode& root = s.nodes[0];
-    ASSERT_GT(root.childCount, 0u);
-    EXPECT_LE(root.childCount, kMaxClusterChildren);
+    ASSERT_GT(s.nodes[0].childCount, 0u);
     std::uint64_t clusters = 0;
-    for (std::uint32_t c = 0; c < root.childCount; ++c) {
-        const BuildNode& child = s.nodes[root.firstChild + c];
-        EXPECT_EQ(child.childCount, 0u);
+    std::uint64_t pieces = 0;
+    std::uint32_t deepest = 0;
+    const std::vector<std::uint32_t> all = reachable(s.nodes);
+    for (const std::uint32_t n : all) {
+        const BuildNode& node = s.nodes[n];
+        deepest = std::max<std::uint32_t>(deepest, node.level);
+        EXPECT_LE(node.childCount, kClusterNodeBranching) << "node " << n;
+        if (node.childCount > 0) {
+            EXPECT_EQ(node.triangleCount, 0u) << "node " << n;
+            // The split leaf (the root here) keeps the octree's cube; the nodes below it are
+            // baked on their own bounds.
+            if (n != 0) {
+                EXPECT_GT(node.cube.faces[3].a, 0.8f) << "node " << n;
+            }
+            continue;
+        }
         const auto k = clustersOf(
-                std::span(s.triangles).subspan(child.firstTriangle, child.triangleCount), s.grid);
-        EXPECT_GE(k, 1u);
-        EXPECT_LE(k, 3u);
+                std::span(s.triangles).subspan(node.firstTriangle, node.triangleCount), s.grid);
+        EXPECT_GE(k, 1u) << "piece " << n;
+        EXPECT_LE(k, 3u) << "piece " << n;
         clusters += k;
+        ++pieces;
     }
-    EXPECT_GT(clusters, kMaxClusterChildren);
+    EXPECT_GT(clusters, 255u);
+    // A tree: no node reached twice (a wrong firstChild would share or skip children).
+    std::vector<std::uint32_t> sorted = all;
+    std::sort(sorted.begin(), sorted.end());
+    EXPECT_EQ(std::adjacent_find(sorted.begin(), sorted.end()), sorted.end());
+    // Balanced: log4 of the pieces, rounded up, levels below the leaf (one more for an uneven cut).
+    std::uint32_t levels = 0;
+    for (std::uint64_t span = 1; span < pieces; span *= kClusterNodeBranching)
+        ++levels;
+    EXPECT_LE(deepest, levels + 1);
 }
 
 TEST(ClusterNodesTest, TheThreadsChangeNothing) {
