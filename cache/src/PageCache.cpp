@@ -4,6 +4,7 @@
 #include <ff/cache/PageLru.h>
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <condition_variable>
 #include <deque>
@@ -92,6 +93,7 @@ struct PageEntry {
      *  read there stays 1 until the main thread pins again. */
     std::shared_ptr<const PageBuffer> bytes;
     std::uint64_t usedFrame = kNeverUsed; ///< Resident: last frame whose tryGet() returned it
+    std::chrono::steady_clock::time_point requested; ///< Pending: when request() queued it
     Status failure;                       ///< Failed: why
 };
 
@@ -209,6 +211,8 @@ struct PageCache::Impl {
             }
         }
         entry.state = PageState::Resident;
+        stats.fetchToResident.add(
+                std::chrono::duration<double>(std::chrono::steady_clock::now() - entry.requested).count());
         entry.bytes = std::make_shared<const PageBuffer>(std::move(done.bytes));
         entry.usedFrame = kNeverUsed;
         lru.touch(done.page);
@@ -356,7 +360,9 @@ void PageCache::request(std::uint64_t page, float priority) {
         m.shared->queue.push(page, priority, m.frame);
     }
     m.shared->workAvailable.notify_one();
-    m.entries[page].state = PageState::Pending;
+    PageEntry& entry = m.entries[page];
+    entry.state = PageState::Pending;
+    entry.requested = std::chrono::steady_clock::now();
     ++m.inFlight;
     ++m.stats.requests;
     m.stats.inFlight = m.inFlight;

@@ -686,6 +686,8 @@ SessionTotals StreamingSession::totals() const {
     t.uniqueBytes = s.counting->uniquePages() * s.scene().pageSize();
     t.peakResidentBytes = s.peakResidentBytes;
     t.budgetBytes = s.cache->budgetBytes();
+    t.fetchToResidentP50 = c.fetchToResident.quantile(0.50);
+    t.fetchToResidentP95 = c.fetchToResident.quantile(0.95);
     return t;
 }
 

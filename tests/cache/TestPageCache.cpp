@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <chrono>
 #include <cstdint>
 #include <map>
 #include <memory>
@@ -173,6 +174,24 @@ TEST(PageCacheTest, DrainInstallsEverythingRequested) {
     cache->request(3, 9.0f);
     EXPECT_EQ(cache->stats().requests, 50u);
     EXPECT_EQ(source->readCount(3), 1u);
+}
+
+TEST(PageCacheTest, FetchToResidentRunsFromTheRequestToTheInstall) {
+    auto source = std::make_shared<FakePageSource>(kPageSize, 10);
+    auto cache = makeCache(source, makeOptions(16 * kPageSize));
+    cache->beginFrame();
+    for (std::uint64_t page = 0; page < 4; ++page)
+        cache->request(page, 1.0f);
+    source->waitUntilFinished(4);
+    // Read long ago, installed only now: the frame saw the page when pump() made it resident.
+    std::this_thread::sleep_for(std::chrono::milliseconds(50));
+    cache->drain();
+    const LatencyHistogram& latency = cache->stats().fetchToResident;
+    EXPECT_EQ(latency.count(), 4u);
+    EXPECT_GE(latency.quantile(0.0), 0.05);
+    // Resident pages asked for again are no new fetch.
+    loadPages(*cache, range(0, 4));
+    EXPECT_EQ(cache->stats().fetchToResident.count(), 4u);
 }
 
 TEST(PageCacheTest, PumpInstallsAtMostTheGivenNumber) {

@@ -57,8 +57,12 @@ TEST(ReplayCommandTest, ResidentBytesStayWithinTheBudgetAlongAPath) {
     const json s = readJsonFile(summary);
     ASSERT_TRUE(s.is_object());
     for (const char* key : {"frames", "p50_ms", "p95_ms", "p99_ms", "bytes_read", "unique_bytes", "peak_resident_bytes",
-                            "budget_bytes", "debt_frames", "stalled_frames", "max_frames_to_full_quality"})
+                            "budget_bytes", "debt_frames", "stalled_frames", "max_frames_to_full_quality",
+                            "fetch_to_resident_p50_ms", "fetch_to_resident_p95_ms"})
         EXPECT_TRUE(s.contains(key)) << key;
+    // Pages were read, so each took some time from its request to its install.
+    EXPECT_GT(s["fetch_to_resident_p50_ms"].get<double>(), 0.0);
+    EXPECT_GE(s["fetch_to_resident_p95_ms"].get<double>(), s["fetch_to_resident_p50_ms"].get<double>());
     EXPECT_EQ(s["frames"], 24);
     EXPECT_EQ(s["budget_bytes"], 1u << 20);
     EXPECT_LE(s["peak_resident_bytes"].get<std::uint64_t>(), 1u << 20);

@@ -236,6 +236,10 @@ int runReplay(const ReplayArgs& args) {
             {"unique_bytes", uniqueBytes},
             {"over_fetch", uniqueBytes ? static_cast<double>(total.bytesRead) / static_cast<double>(uniqueBytes) : 0.0},
             {"peak_resident_bytes", total.peakResidentBytes},
+            // From a page's request to its install in the cache, upper edges of the histogram's
+            // buckets (within 9 %, cache/LatencyHistogram.h).
+            {"fetch_to_resident_p50_ms", total.fetchToResidentP50 * 1e3},
+            {"fetch_to_resident_p95_ms", total.fetchToResidentP95 * 1e3},
             // The frame that used the most pages: node against geometry page bytes, and the
             // share of their slots it used (records visited, triangles drawn).
             {"frame_node_bytes", peakUse.nodePageBytes},

@@ -34,6 +34,7 @@
 // it runs there. The cache owns options.ioThreads I/O threads, which share only the request
 // queue and the completion queue with it (under one mutex) and never touch the resident set.
 
+#include <ff/cache/LatencyHistogram.h>
 #include <ff/cache/PageDecoder.h>
 #include <ff/storage/PageSource.h>
 #include <ff/storage/Status.h>
@@ -97,6 +98,10 @@ struct PageCacheStats {
     std::uint64_t residentBytes = 0;
     std::uint64_t peakResidentBytes = 0;
     std::uint64_t inFlight = 0; ///< requests queued, being read or waiting for pump()
+    /** Fetch to resident: from the request() that queued a read to the pump() that installed
+     *  it, for every page installed (a read cancelled and asked for again counts from the new
+     *  request). It includes the wait for the next pump(), as frames see it. */
+    LatencyHistogram fetchToResident;
 };
 
 /**

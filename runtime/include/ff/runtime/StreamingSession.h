@@ -71,6 +71,10 @@ struct SessionTotals {
     std::uint64_t uniqueBytes = 0;
     std::uint64_t peakResidentBytes = 0; ///< the most resident page bytes at a frame's end
     std::uint64_t budgetBytes = 0;
+    /** Fetch to resident (cache::PageCacheStats::fetchToResident), seconds: median and p95 of
+     *  the pages installed (0 without a cache or before the first install). */
+    double fetchToResidentP50 = 0.0;
+    double fetchToResidentP95 = 0.0;
 };
 
 /**
