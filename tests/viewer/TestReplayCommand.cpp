@@ -211,6 +211,31 @@ TEST(ReplayCommandTest, TerrainWorkingSetGrowsFarSlowerThanTheScene) {
     EXPECT_LT(large, 1.7 * small) << small << " -> " << large << " bytes";
 }
 
+// Format 2: node slots are 48-byte records (nodesPerPageV2), and cluster pages have no triangle
+// slots, so the summary gives bytes a drawn triangle instead.
+TEST(ReplayCommandTest, FormatTwoSummaryCountsItsOwnSlots) {
+    const fs::path dir = freshTestDir();
+    const fs::path scene = dir / "terrain.ffs";
+    const ProcessResult built = runFarfield(
+            {"build", "-q", "--generate", "terrain:triangles=200000", "--format", "2", "-o", scene.string()}, dir);
+    ASSERT_EQ(built.exitCode, 0) << built.describe();
+    const fs::path path = makePath(dir, scene, "orbit", 1);
+    const fs::path summary = dir / "summary.json";
+    const ProcessResult run = runFarfield(
+            {"replay", scene.string(), path.string(), "--sync", "--cache-mb", "256", "--size", "120x90",
+             "--summary", summary.string()},
+            dir);
+    ASSERT_EQ(run.exitCode, 0) << run.describe();
+    const json s = readJsonFile(summary);
+    SCOPED_TRACE(s.dump());
+    EXPECT_GT(s["frame_node_slot_use"].get<double>(), 0.0);
+    EXPECT_LE(s["frame_node_slot_use"].get<double>(), 1.0);
+    EXPECT_TRUE(s["frame_triangle_slot_use"].is_null());
+    // A triangle is 6-8 bytes in its cluster; pages the frame drew only in part cost more.
+    EXPECT_GT(s["frame_geometry_bytes_per_triangle"].get<double>(), 5.0);
+    EXPECT_LT(s["frame_geometry_bytes_per_triangle"].get<double>(), 60.0);
+}
+
 TEST(ReplayCommandTest, ColdCacheCoversTheScreenFromTheFirstFrame) {
     const fs::path dir = freshTestDir();
     const fs::path scene = buildForest(dir);

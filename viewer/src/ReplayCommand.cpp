@@ -221,6 +221,7 @@ int runReplay(const ReplayArgs& args) {
     const runtime::SessionTotals total = streaming.totals();
     const std::uint64_t uniqueBytes = total.uniqueBytes;
     const std::uint32_t pageSize = scene.pageSize();
+    const bool formatTwo = scene.formatVersion() == storage::kFormatVersion2;
     const auto share = [](std::uint64_t used, std::uint64_t slots) {
         return slots ? static_cast<double>(used) / static_cast<double>(slots) : 0.0;
     };
@@ -247,9 +248,17 @@ int runReplay(const ReplayArgs& args) {
             {"frame_nodes_visited", peakUse.nodesVisited},
             {"frame_triangles_drawn", peakUse.trianglesDrawn},
             {"frame_node_slot_use",
-             share(peakUse.nodesVisited, peakUse.nodePageBytes / pageSize * storage::nodesPerPage(pageSize))},
+             share(peakUse.nodesVisited,
+                   peakUse.nodePageBytes / pageSize *
+                           (formatTwo ? storage::nodesPerPageV2(pageSize) : storage::nodesPerPage(pageSize)))},
+            // Format 2's pages hold clusters of any size, not triangle slots: null there, where
+            // geometry bytes a drawn triangle (the pages' share the frame did not draw included)
+            // says how well they are used.
             {"frame_triangle_slot_use",
-             share(peakUse.trianglesDrawn, peakUse.geometryPageBytes / pageSize * storage::trianglesPerPage(pageSize))},
+             formatTwo ? nlohmann::json(nullptr)
+                       : nlohmann::json(share(peakUse.trianglesDrawn,
+                                              peakUse.geometryPageBytes / pageSize * storage::trianglesPerPage(pageSize)))},
+            {"frame_geometry_bytes_per_triangle", share(peakUse.geometryPageBytes, peakUse.trianglesDrawn)},
             {"budget_bytes", total.budgetBytes},
             {"debt_frames", debtFrames},
             {"stalled_frames", stalledFrames},
