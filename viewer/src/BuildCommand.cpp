@@ -221,8 +221,9 @@ CommandRunner addBuildCommand(CLI::App& app) {
                     "--format 2: subtrees of at most this many triangles become one leaf of whole clusters (0: keep the leaves)")
             ->capture_default_str();
     cmd->add_flag("--cluster-nodes", args->clusterNodes,
-                  "--format 2: give each leaf a node per cluster, with its own bounds and cube, so the cut can stop inside "
-                  "a leaf: far views draw far fewer triangles, for ~0.4-0.9 bytes a triangle more (docs/results)");
+                  "--format 2: give each leaf a tree of nodes down to pieces of about a cluster, each with its own bounds "
+                  "and cube, so the cut can stop inside a leaf: far views draw far fewer triangles, for 0.6-1 byte a "
+                  "triangle more (docs/results, \"Cluster nodes\")");
     cmd->add_flag("-q,--quiet", args->quiet, "No progress or summary on stderr");
     return [args]() { return runBuild(*args); };
 }

@@ -64,10 +64,11 @@ struct HierarchyParams {
      *  clusters, so a node's 48-byte record is spread over many triangles (the v2 estimate of
      *  docs/results "Compact geometry" was measured at 4096). 0 keeps the hierarchy's leaves. */
     std::uint64_t clusterLeafTriangles = 4096;
-    /** Format 2 only: each leaf gets a child per cluster, with the piece's bounds and cube, so a
-     *  cut can stop inside a leaf (builder/src/ClusterNodes.h): far views draw many fewer
-     *  triangles for ~0.4-0.9 bytes a triangle more (docs/results "Cluster nodes"). Off by
-     *  default: it would take the scanned models over issue 16's 8 bytes a triangle. */
+    /** Format 2 only: each leaf gets a tree of nodes, at most four wide, down to pieces of
+     *  about a cluster, each with its bounds and cube, so a cut can stop inside a leaf
+     *  (builder/src/ClusterNodes.h): far views draw far fewer triangles for 0.6-1 byte a
+     *  triangle more (docs/results "Cluster nodes"). Off by default: it takes the scanned
+     *  models over issue 16's 8 bytes a triangle, and teleports gain nothing from it. */
     bool clusterNodes = false;
 };
 
