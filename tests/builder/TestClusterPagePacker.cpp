@@ -49,6 +49,13 @@ bool fitTogether(std::initializer_list<const std::vector<std::byte>*> clusters) 
     return true;
 }
 
+/** A version 2 writer of kPage pages to a temporary file, never committed (so removed). */
+Result<std::unique_ptr<storage::SceneWriter>> makeWriter(const char* name) {
+    return storage::SceneWriter::create(
+            std::filesystem::path(FF_TEST_TMP_DIR) / name,
+            {.pageSize = kPage, .formatVersion = storage::kFormatVersion2});
+}
+
 TEST(ClusterPagePackerTest, ALaterNodesClusterFillsAnOlderPage) {
     // Two nodes of three large clusters, a page each, then two nodes of one small cluster that
     // fits beside either three but not twice: with one open page the first page closes with its
@@ -63,9 +70,7 @@ TEST(ClusterPagePackerTest, ALaterNodesClusterFillsAnOlderPage) {
     for (int i = 0; i < 3; ++i)
         threeLarge.insert(threeLarge.end(), large.begin(), large.end());
 
-    const auto path = std::filesystem::path(FF_TEST_TMP_DIR) / "packer.ffs";
-    auto writer = storage::SceneWriter::create(
-            path, {.pageSize = kPage, .formatVersion = storage::kFormatVersion2});
+    auto writer = makeWriter("packer.ffs");
     ASSERT_TRUE(writer.isOk()) << writer.status().toString();
     ClusterPagePacker packer(**writer, 0);
     const std::vector<std::pair<const std::vector<std::byte>*, std::uint32_t>> payloads = {
@@ -96,9 +101,7 @@ TEST(ClusterPagePackerTest, ANodeSpreadOverPagesGetsARunInEach) {
         const std::vector<std::byte> cluster = oneCluster(60 + 5 * c);
         payload.insert(payload.end(), cluster.begin(), cluster.end());
     }
-    const auto path = std::filesystem::path(FF_TEST_TMP_DIR) / "packer-spread.ffs";
-    auto writer = storage::SceneWriter::create(
-            path, {.pageSize = kPage, .formatVersion = storage::kFormatVersion2});
+    auto writer = makeWriter("packer-spread.ffs");
     ASSERT_TRUE(writer.isOk()) << writer.status().toString();
     ClusterPagePacker packer(**writer, 0);
     std::vector<storage::RepresentationRecord> runs;
