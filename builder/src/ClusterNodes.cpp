@@ -7,6 +7,7 @@
 #include <ff/storage/Assert.h>
 
 #include <algorithm>
+#include <cmath>
 #include <limits>
 
 namespace ff::builder {
@@ -116,7 +117,8 @@ struct SplitTree {
 
 /** Splits one leaf's run into a tree of nodes below it, each at most kClusterNodeBranching
  *  children wide, whose leaves are spatially compact pieces of about a cluster, as many as the
- *  clusters the run encodes to (none when it is one cluster). Touches only `run`. */
+ *  clusters the run encodes to times kPiecesPerCluster (none when it is one cluster). Touches
+ *  only `run`. */
 class LeafSplitter {
 public:
     explicit LeafSplitter(const LeafShapeV2& shape)
@@ -130,6 +132,8 @@ public:
                 const std::uint32_t clusters, mEncoder.countClusters(run, *mShape.grid));
         if (clusters <= 1)
             return SplitTree{};
+        const auto pieces = static_cast<std::uint32_t>(std::min<double>(
+                std::ceil(clusters * kPiecesPerCluster), static_cast<double>(run.size())));
         SplitTree out;
         std::vector<BuildNode>& tree = out.nodes;
         std::vector<Group> groups; // tree[i] is groups[i]
@@ -140,7 +144,7 @@ public:
                 tree.push_back(node(leaf, run, g, static_cast<std::uint8_t>(parentLevel + 1)));
             }
         };
-        addChildren({0, run.size(), clusters}, leaf.level);
+        addChildren({0, run.size(), pieces}, leaf.level);
         out.direct = static_cast<std::uint32_t>(tree.size());
         for (std::size_t i = 0; i < tree.size(); ++i) {
             if (groups[i].parts <= 1)

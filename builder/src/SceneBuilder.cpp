@@ -148,6 +148,10 @@ Result<std::unique_ptr<SceneBuilder>> SceneBuilder::create(
     impl->report.pageSizeAuto = !options.pageSize.has_value();
     impl->report.threads = impl->options.threads;
     impl->report.decomposition = std::string(decompositionName(options.hierarchy.decomposition));
+    if (options.formatVersion == storage::kFormatVersion2) {
+        impl->report.clusterLeafTriangles = options.hierarchy.clusterLeafTriangles;
+        impl->report.clusterNodes = options.hierarchy.clusterNodes;
+    }
     impl->report.spillCodec = std::string(spillCodecName(options.spillCodec));
     return std::unique_ptr<SceneBuilder>(new SceneBuilder(std::move(impl)));
 }
@@ -469,6 +473,8 @@ std::string buildReportJson(const BuildReport& r) {
             {"empty_prototypes", r.emptyPrototypes},
             {"instances", r.instances},
             {"decomposition", r.decomposition},
+            {"cluster_leaf_triangles", r.clusterLeafTriangles},
+            {"cluster_nodes", r.clusterNodes},
             {"nodes", r.nodes},
             {"leaf_nodes", r.leafNodes},
             {"depth", r.maxDepth},

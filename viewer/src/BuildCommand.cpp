@@ -42,7 +42,7 @@ struct BuildArgs {
     std::string tempDirectory;
     std::string spill = "compact";
     unsigned format = 1;
-    std::uint64_t clusterLeafTriangles = 4096;
+    std::optional<std::uint64_t> clusterLeafTriangles; ///< by --cluster-nodes when not given
     bool clusterNodes = false;
     bool quiet = false;
 };
@@ -82,7 +82,8 @@ int runBuild(const BuildArgs& args) {
         return reportError("build", Status(ErrorCode::InvalidArgument, "--spill must be compact or raw"));
     options.spillCodec = *spill;
     options.formatVersion = args.format;
-    options.hierarchy.clusterLeafTriangles = args.clusterLeafTriangles;
+    options.hierarchy.clusterLeafTriangles = args.clusterLeafTriangles.value_or(
+            args.clusterNodes ? builder::kClusterNodesLeafTriangles : builder::kClusterLeafTriangles);
     options.hierarchy.clusterNodes = args.clusterNodes;
     options.hierarchy.bakeResolution = args.bakeResolution;
     options.hierarchy.bakeInnerDirect = args.bakeInner == "direct";
@@ -218,8 +219,8 @@ CommandRunner addBuildCommand(CLI::App& app) {
             ->check(CLI::IsMember({1u, 2u}))
             ->capture_default_str();
     cmd->add_option("--cluster-leaf-triangles", args->clusterLeafTriangles,
-                    "--format 2: subtrees of at most this many triangles become one leaf of whole clusters (0: keep the leaves)")
-            ->capture_default_str();
+                    "--format 2: subtrees of at most this many triangles become one leaf of whole clusters (0: keep the "
+                    "leaves); default 4096, 65536 with --cluster-nodes");
     cmd->add_flag("--cluster-nodes", args->clusterNodes,
                   "--format 2: give each leaf a tree of nodes down to pieces of about a cluster, each with its own bounds "
                   "and cube, so the cut can stop inside a leaf: far views draw far fewer triangles, for 0.6-1 byte a "

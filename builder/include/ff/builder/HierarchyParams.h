@@ -41,6 +41,15 @@ struct DecompositionParams {
     int maxDepth = 40;
 };
 
+/** Format 2's leaves: subtrees of at most this many triangles become one leaf of clusters. */
+inline constexpr std::uint64_t kClusterLeafTriangles = 4096;
+/** The same with cluster nodes, whose slab trees replace the decomposition below a leaf: an
+ *  octree's cells of a few thousand triangles on a heightfield include slivers where the surface
+ *  crosses a cell's middle height, tens of units wide and two triangles deep, that cover a
+ *  pixel from far and are drawn whole, each pulling in a page. From leaves this large the slabs
+ *  cut the surface instead (docs/results, "Cluster nodes": the top-down frame 41 % smaller). */
+inline constexpr std::uint64_t kClusterNodesLeafTriangles = 65536;
+
 /** How the builder subdivides and bakes. The defaults are the ones the benchmarks chose. */
 struct HierarchyParams {
     Decomposition decomposition = Decomposition::Octree;
@@ -62,8 +71,9 @@ struct HierarchyParams {
     bool bakeInnerDirect = false;
     /** Format 2 only: a subtree of at most this many triangles is written as one leaf of whole
      *  clusters, so a node's 48-byte record is spread over many triangles (the v2 estimate of
-     *  docs/results "Compact geometry" was measured at 4096). 0 keeps the hierarchy's leaves. */
-    std::uint64_t clusterLeafTriangles = 4096;
+     *  docs/results "Compact geometry" was measured at 4096). 0 keeps the hierarchy's leaves.
+     *  With clusterNodes, kClusterNodesLeafTriangles is the better choice. */
+    std::uint64_t clusterLeafTriangles = kClusterLeafTriangles;
     /** Format 2 only: each leaf gets a tree of nodes, at most four wide, down to pieces of
      *  about a cluster, each with its bounds and cube, so a cut can stop inside a leaf
      *  (builder/src/ClusterNodes.h): far views draw far fewer triangles for 0.6-1 byte a

@@ -94,6 +94,8 @@ struct BuildReport {
     std::uint64_t nodes = 0;
     std::uint64_t leafNodes = 0;           ///< prototype nodes without children (geometry nodes)
     std::string decomposition;             ///< HierarchyParams::decomposition's name
+    std::uint64_t clusterLeafTriangles = 0; ///< format 2: HierarchyParams's (0 for format 1)
+    bool clusterNodes = false;             ///< format 2: HierarchyParams's
     std::uint32_t maxDepth = 0;            ///< deepest prototype level
     std::uint32_t instanceLevelDepth = 0;
     std::uint64_t chunks = 0;
