@@ -9,6 +9,7 @@
 #include <deque>
 #include <mutex>
 #include <string>
+#include <system_error>
 #include <thread>
 #include <unordered_map>
 #include <unordered_set>
@@ -117,10 +118,26 @@ GeometryDecodeStage::GeometryDecodeStage(
         std::vector<storage::PositionGrid> grids,
         std::uint32_t pageSize,
         const DecodeStageOptions& options)
-    : mImpl(std::make_unique<Impl>(cache, std::move(grids), pageSize, options.capacity)) {
+    : mImpl(std::make_unique<Impl>(cache, std::move(grids), pageSize, options.capacity)) {}
+
+Result<std::unique_ptr<GeometryDecodeStage>> GeometryDecodeStage::create(
+        cache::PageCache& cache,
+        std::vector<storage::PositionGrid> grids,
+        std::uint32_t pageSize,
+        const DecodeStageOptions& options) {
+    std::unique_ptr<GeometryDecodeStage> stage(
+            new GeometryDecodeStage(cache, std::move(grids), pageSize, options));
     const unsigned threads = std::max(options.threads, 1u);
-    for (unsigned t = 0; t < threads; ++t)
-        mImpl->threads.emplace_back([impl = mImpl.get()] { impl->decodeLoop(); });
+    try {
+        for (unsigned t = 0; t < threads; ++t)
+            stage->mImpl->threads.emplace_back(
+                    [impl = stage->mImpl.get()] { impl->decodeLoop(); });
+    } catch (const std::system_error& error) {
+        // The stage's destructor stops and joins the threads already started.
+        return Status(
+                ErrorCode::Internal, std::string("cannot start a decode thread: ") + error.what());
+    }
+    return stage;
 }
 
 GeometryDecodeStage::~GeometryDecodeStage() {

@@ -58,8 +58,9 @@ struct DecodeStageStats {
  */
 class GeometryDecodeStage final : public IDecodedGeometry {
 public:
-    /** `grids`: each prototype's position grid; `pageSize`: the file's (bounds a decode). */
-    GeometryDecodeStage(
+    /** `grids`: each prototype's position grid; `pageSize`: the file's (bounds a decode).
+     *  Errors: Internal when the system cannot start a decode thread. */
+    [[nodiscard]] static Result<std::unique_ptr<GeometryDecodeStage>> create(
             cache::PageCache& cache,
             std::vector<storage::PositionGrid> grids,
             std::uint32_t pageSize,
@@ -80,7 +81,14 @@ public:
     [[nodiscard]] std::vector<Status> takeFailures();
     [[nodiscard]] const DecodeStageStats& stats() const noexcept;
 
+
 private:
+    GeometryDecodeStage(
+            cache::PageCache& cache,
+            std::vector<storage::PositionGrid> grids,
+            std::uint32_t pageSize,
+            const DecodeStageOptions& options);
+
     struct Impl;
     std::unique_ptr<Impl> mImpl;
 };

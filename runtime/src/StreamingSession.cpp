@@ -252,8 +252,10 @@ Status StreamingSession::Impl::startDrawing(const SessionOptions& options) {
     rendererOptions = options.renderer;
     if (isV2(scene())) {
         FF_ASSERT(cache != nullptr); // format 2 always streams through the cache
-        decodeStage = std::make_unique<GeometryDecodeStage>(
-                *cache, positionGrids(scene()), scene().pageSize(), DecodeStageOptions{});
+        FF_ASSIGN_OR_RETURN(
+                decodeStage,
+                GeometryDecodeStage::create(
+                        *cache, positionGrids(scene()), scene().pageSize(), DecodeStageOptions{}));
     }
     FF_ASSIGN_OR_RETURN(renderer, Renderer::create(scene(), options.renderer, decodeStage.get()));
     return Status::ok();

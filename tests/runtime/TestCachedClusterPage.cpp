@@ -259,7 +259,9 @@ TEST_F(CachedClusterPageTest, TheStageDecodesAPageForTheFrameAfterItIsAskedAndFr
             *CachedClusterPage::view(cached), mGrids, storage::maxDecodedClusterBytes(kPageSize));
     ASSERT_TRUE(expected.isOk());
 
-    GeometryDecodeStage stage(*cache, mGrids, kPageSize, {2, 8});
+    auto created = GeometryDecodeStage::create(*cache, mGrids, kPageSize, {2, 8});
+    ASSERT_TRUE(created.isOk()) << created.status().message();
+    GeometryDecodeStage& stage = **created;
     stage.beginFrame();
     EXPECT_FALSE(stage.prepare(page));
     stage.drain();
@@ -293,7 +295,9 @@ TEST_F(CachedClusterPageTest, TheStageHoldsNoMoreThanItsCapacityAndFreesWhatIsNo
     auto cache = makeCache(4u << 20);
     ASSERT_NE(cache, nullptr);
     readIn(*cache, mGeometryPages);
-    GeometryDecodeStage stage(*cache, mGrids, kPageSize, {1, 1});
+    auto created = GeometryDecodeStage::create(*cache, mGrids, kPageSize, {1, 1});
+    ASSERT_TRUE(created.isOk()) << created.status().message();
+    GeometryDecodeStage& stage = **created;
     stage.beginFrame();
     EXPECT_FALSE(stage.prepare(mGeometryPages[0]));
     EXPECT_FALSE(stage.prepare(mGeometryPages[1])); // over capacity: not queued
@@ -329,7 +333,9 @@ TEST_F(CachedClusterPageTest, APageTheStageCannotDecodeFailsOnceNamingIt) {
     ASSERT_NE(cache, nullptr);
     readIn(*cache, mGeometryPages);
     // The stage knows only prototype 0's grid; the second page is prototype 1's.
-    GeometryDecodeStage stage(*cache, {mGrids[0]}, kPageSize);
+    auto created = GeometryDecodeStage::create(*cache, {mGrids[0]}, kPageSize);
+    ASSERT_TRUE(created.isOk()) << created.status().message();
+    GeometryDecodeStage& stage = **created;
     stage.beginFrame();
     EXPECT_FALSE(stage.prepare(mGeometryPages[1]));
     stage.drain();
