@@ -82,8 +82,8 @@ constexpr std::uint64_t kWallTriangles = 12;
 constexpr std::uint64_t kStatueTriangles = 12 * kStatueSubdivision * kStatueSubdivision;
 
 /** Builds `file` with what `fill` adds, within the smallest memory budget. */
-template <typename Fill> fs::path buildScene(const fs::path& file, Fill&& fill) {
-    builder::BuildOptions options;
+template <typename Fill>
+fs::path buildScene(const fs::path& file, Fill&& fill, builder::BuildOptions options = {}) {
     options.memoryBudgetBytes = builder::SceneBuilder::kMinimumBudgetBytes;
     auto scene = builder::SceneBuilder::create(file, options);
     EXPECT_TRUE(scene.isOk()) << scene.status().toString();
@@ -134,14 +134,18 @@ fs::path buildTiledWallAndStatue(const fs::path& dir) {
     });
 }
 
-fs::path buildGenerated(const fs::path& dir, const std::string& generator) {
-    return buildScene(dir / "scene.ffs", [&](builder::SceneBuilder& scene) {
-        auto spec = builder::parseGeneratorSpec(generator);
-        EXPECT_TRUE(spec.isOk());
-        if (spec) {
-            EXPECT_TRUE(builder::runGenerator(*spec, scene).isOk());
-        }
-    });
+fs::path buildGenerated(
+        const fs::path& dir, const std::string& generator, builder::BuildOptions options = {}) {
+    return buildScene(
+            dir / "scene.ffs",
+            [&](builder::SceneBuilder& scene) {
+                auto spec = builder::parseGeneratorSpec(generator);
+                EXPECT_TRUE(spec.isOk());
+                if (spec) {
+                    EXPECT_TRUE(builder::runGenerator(*spec, scene).isOk());
+                }
+            },
+            options);
 }
 
 class OcclusionCullingTest : public ::testing::Test {
@@ -177,6 +181,10 @@ protected:
         context.occlusion.backend = mBackend;
         return context;
     }
+
+    /** Along walkWithJumps over the open scene (built from `generator`): culled frames show
+     *  what the frustum-culled ones show, and occlusion culls something. */
+    void expectNothingVisibleCulled(const std::string& generator, float epsilon);
 
     OcclusionBackend mBackend = OcclusionBackend::Queries;
 
@@ -326,6 +334,11 @@ TEST_P(NothingVisibleIsCulled, AlongAWalkWithJumps) {
     const auto& [generator, epsilon, backend] = GetParam();
     mBackend = backend;
     open(buildGenerated(freshDir(), generator));
+    expectNothingVisibleCulled(generator, epsilon);
+}
+
+void OcclusionCullingTest::expectNothingVisibleCulled(
+        const std::string& generator, float epsilon) {
     std::uint64_t occluded = 0;
     std::size_t mostTies = 0;
     std::uint64_t culledTriangles = 0;
@@ -405,6 +418,38 @@ INSTANTIATE_TEST_SUITE_P(
                 std::tuple<std::string, float, OcclusionBackend>{
                         "forest:trees=64", 0.0f, OcclusionBackend::Hzb}),
         sceneName);
+
+/** Format 2 (48-byte records, bounds quantized outward, clusters) with each decomposition of
+ *  the hierarchy: what occlusion culling needs of a hierarchy survives the format. */
+class FormatTwoDecompositions
+    : public OcclusionCullingTest,
+      public ::testing::WithParamInterface<std::tuple<builder::Decomposition, float>> {};
+
+TEST_P(FormatTwoDecompositions, NothingVisibleIsCulledAlongAWalkWithJumps) {
+    const auto& [decomposition, epsilon] = GetParam();
+    builder::BuildOptions options;
+    options.formatVersion = storage::kFormatVersion2;
+    options.hierarchy.decomposition = decomposition;
+    const std::string generator = "molecule:spheres=300";
+    open(buildGenerated(freshDir(), generator, options));
+    ASSERT_EQ(mCulling->scene().formatVersion(), storage::kFormatVersion2);
+    expectNothingVisibleCulled(generator, epsilon);
+}
+
+INSTANTIATE_TEST_SUITE_P(
+        Decompositions,
+        FormatTwoDecompositions,
+        ::testing::Combine(
+                ::testing::Values(
+                        builder::Decomposition::Octree,
+                        builder::Decomposition::Dbvd,
+                        builder::Decomposition::Phbvo,
+                        builder::Decomposition::Balanced),
+                ::testing::Values(0.0f, 1.0f)),
+        [](const auto& param) {
+            return std::string(builder::decompositionName(std::get<0>(param.param))) +
+                   (std::get<1>(param.param) == 0.0f ? "_eps0" : "_eps1");
+        });
 
 TEST_P(BothBackends, AColdCacheIsNotWaitedFor) {
     open(buildGenerated(freshDir(), "molecule:spheres=2000"), 64ull << 20);
