@@ -1,4 +1,5 @@
 #include <ff/builder/ClusterBuild.h>
+#include <ff/storage/VertexCodec.h>
 
 #include <meshoptimizer.h>
 
@@ -15,6 +16,7 @@ ClusterBuildStats& ClusterBuildStats::operator+=(const ClusterBuildStats& other)
     clusters += other.clusters;
     trianglesIn += other.trianglesIn;
     trianglesKept += other.trianglesKept;
+    trianglesUnlit += other.trianglesUnlit;
     uniqueVertices += other.uniqueVertices;
     clusterVertices += other.clusterVertices;
     encodedBytes += other.encodedBytes;
@@ -79,6 +81,10 @@ Result<std::size_t> ClusterEncoder::buildMeshlets(
         if (a == b || b == c || a == c)
             continue;
         mIndices.insert(mIndices.end(), corner.begin(), corner.end());
+        if (std::all_of(corner.begin(), corner.end(), [&](unsigned int k) {
+                return storage::isUnlitNormal(mVertices[k].normalOct);
+            }))
+            ++stats.trianglesUnlit;
     }
     stats.trianglesKept = mIndices.size() / 3;
     if (mIndices.empty())

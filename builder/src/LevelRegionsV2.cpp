@@ -28,6 +28,7 @@ Result<EncodedRun> encodeRun(
     out.bytes = bytes.size() - out.offset;
     out.clusters = static_cast<std::uint32_t>(stats.clusters);
     out.kept = stats.trianglesKept;
+    out.unlit = stats.trianglesUnlit;
     return out;
 }
 
@@ -115,15 +116,21 @@ Status LevelRegionsV2::append(LevelledSubtree& chunk, ChunkClustersV2& clusters)
     for (std::size_t d = 0; d <= depths; ++d)
         base[d] = region(chunk.rootLevel + static_cast<std::uint32_t>(d)).count;
 
-    // Triangles drawn at and below each record, as stored: from the deepest level up.
+    // Triangles drawn at and below each record, as stored, and how many of them are unlit:
+    // from the deepest level up.
     std::vector<std::vector<double>> drawn(depths);
+    std::vector<std::vector<double>> unlit(depths);
     for (std::size_t d = depths; d-- > 0;) {
         const auto& records = chunk.levels[d].records;
         drawn[d].resize(records.size());
+        unlit[d].resize(records.size());
         for (std::size_t i = 0; i < records.size(); ++i) {
             drawn[d][i] = static_cast<double>(clusters.levels[d].runs[i].kept);
-            for (std::uint32_t c = 0; c < records[i].childCount; ++c)
+            unlit[d][i] = static_cast<double>(clusters.levels[d].runs[i].unlit);
+            for (std::uint32_t c = 0; c < records[i].childCount; ++c) {
                 drawn[d][i] += drawn.at(d + 1).at(records[i].firstChild.slot + c);
+                unlit[d][i] += unlit.at(d + 1).at(records[i].firstChild.slot + c);
+            }
         }
     }
 
@@ -131,11 +138,14 @@ Status LevelRegionsV2::append(LevelledSubtree& chunk, ChunkClustersV2& clusters)
     root.level = chunk.rootLevel;
     root.storedTriangles = clusters.root.kept;
     root.drawnTriangles = static_cast<double>(clusters.root.kept);
+    root.unlitTriangles = static_cast<double>(clusters.root.unlit);
     if (chunk.root.placedChildren) {
         root.firstChild = base[1] + chunk.root.placedChildren->slot;
         root.childCount = chunk.root.childCount;
-        for (std::uint32_t c = 0; c < root.childCount; ++c)
+        for (std::uint32_t c = 0; c < root.childCount; ++c) {
             root.drawnTriangles += drawn.at(1).at(chunk.root.placedChildren->slot + c);
+            root.unlitTriangles += unlit.at(1).at(chunk.root.placedChildren->slot + c);
+        }
     }
     if (clusters.root.clusters > 0) {
         Region& r = region(chunk.rootLevel);
@@ -183,7 +193,8 @@ Status LevelRegionsV2::append(LevelledSubtree& chunk, ChunkClustersV2& clusters)
             p.drawnTriangles = static_cast<float>(drawn[d][i]);
             p.childCount = record.childCount;
             p.representationCount = static_cast<std::uint8_t>(repCount[i]);
-            p.flags = storage::kNodeV2HasCube;
+            p.flags = static_cast<std::uint8_t>(
+                    storage::kNodeV2HasCube | unlitFlag(drawn[d][i], unlit[d][i]));
             if ((record.flags & storage::kNodeOctreeChildren) != 0)
                 p.flags = static_cast<std::uint8_t>(p.flags | storage::kNodeV2OctreeChildren);
             ++mNodes;
@@ -354,6 +365,7 @@ PlacedNodeV2 LevelRegionsV2::placedRoot(std::size_t chunk, std::uint32_t node) c
     placed.representations = root.representations;
     placed.storedTriangles = root.storedTriangles;
     placed.drawnTriangles = root.drawnTriangles;
+    placed.unlitTriangles = root.unlitTriangles;
     return placed;
 }
 

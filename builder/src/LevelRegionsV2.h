@@ -42,6 +42,7 @@ struct EncodedRun {
     std::uint64_t bytes = 0;
     std::uint32_t clusters = 0;
     std::uint64_t kept = 0; ///< triangles the codec kept
+    std::uint64_t unlit = 0; ///< of them, unlit
 };
 
 /** A chunk's clusters, level by level, encoded on its worker thread. */
@@ -110,6 +111,7 @@ private:
                 representations; ///< local pages of region `level`
         std::uint64_t storedTriangles = 0;
         double drawnTriangles = 0.0;
+        double unlitTriangles = 0.0; ///< of drawnTriangles
         std::uint32_t absoluteFirstChild = 0; ///< set by finish()
     };
 

@@ -169,6 +169,7 @@ Result<SubtreeV2Result> writeSubtreeV2(
     std::vector<std::uint32_t> repCount(nodes.size(), 0);
     std::vector<storage::RepresentationRecord> reps;
     std::vector<std::uint64_t> ownKept(nodes.size(), 0);
+    std::vector<std::uint64_t> ownUnlit(nodes.size(), 0);
     {
         // Clustering is most of the encoding's time: done for every node on input.threads
         // threads first, then packed into pages in the nodes' order (deterministic bytes).
@@ -203,6 +204,7 @@ Result<SubtreeV2Result> writeSubtreeV2(
                 const EncodedPayload& payload = encoded[i];
                 result.clusters += payload.stats;
                 ownKept[n] = payload.stats.trianglesKept;
+                ownUnlit[n] = payload.stats.trianglesUnlit;
                 FF_RETURN_IF_ERROR(packer.place(
                         payload.bytes, static_cast<std::uint32_t>(payload.stats.clusters), reps));
                 local.resize(reps.size(), true);
@@ -221,22 +223,29 @@ Result<SubtreeV2Result> writeSubtreeV2(
         result.geometryPages = packer.pages();
     }
 
-    // ---- what each node draws at and below it, as stored -------------------------------------
+    // ---- what each node draws at and below it, as stored, and how much of it is unlit ------
+    // (an instance's prototype counts as lit: the unlit flag is its own nodes')
     std::vector<double> drawn(nodes.size(), 0.0);
+    std::vector<double> unlit(nodes.size(), 0.0);
     for (std::size_t i = tree.order.size(); i-- > 0;) {
         const std::uint32_t n = tree.order[i];
         const BuildNode& node = nodes[n];
-        if (const auto p = placed.find(n); p != placed.end())
+        if (const auto p = placed.find(n); p != placed.end()) {
             drawn[n] += p->second->drawnTriangles;
-        else if (isInstance(node))
+            unlit[n] += p->second->unlitTriangles;
+        } else if (isInstance(node)) {
             drawn[n] += static_cast<double>(
                     node.instanceIndex < input.instanceTriangles.size()
                             ? input.instanceTriangles[node.instanceIndex]
                             : 0);
-        else
+        } else {
             drawn[n] += static_cast<double>(ownKept[n]);
-        if (tree.parent[n] != kNone)
+            unlit[n] += static_cast<double>(ownUnlit[n]);
+        }
+        if (tree.parent[n] != kNone) {
             drawn[tree.parent[n]] += drawn[n];
+            unlit[tree.parent[n]] += unlit[n];
+        }
     }
 
     // ---- node pages: whole sibling blocks in breadth-first order -----------------------------
@@ -312,6 +321,8 @@ Result<SubtreeV2Result> writeSubtreeV2(
             record.kind =
                     isInstance(node) ? storage::NodeKindV2::Instance : storage::NodeKindV2::Cell;
             record.flags = storage::kNodeV2HasCube;
+            if (!isInstance(node))
+                record.flags = static_cast<std::uint8_t>(record.flags | unlitFlag(drawn[n], unlit[n]));
             if (node.childCount > 0) {
                 if (const auto q = placed.find(n); q != placed.end() && node.placedChildren) {
                     record.firstChild = q->second->firstChild;

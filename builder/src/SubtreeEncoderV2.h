@@ -54,7 +54,16 @@ struct PlacedNodeV2 {
     std::vector<storage::RepresentationRecord> representations; ///< its own payload, final pages
     std::uint64_t storedTriangles = 0;                          ///< its own, as the codec kept them
     double drawnTriangles = 0.0;                                ///< its own and all below it
+    double unlitTriangles = 0.0;                                ///< of drawnTriangles
 };
+
+/** kNodeV2Unlit for a Cell whose triangles, its own and all below it, are all unlit (none:
+ *  no flag); else 0. */
+inline std::uint8_t unlitFlag(double drawnTriangles, double unlitTriangles) noexcept {
+    return drawnTriangles > 0.0 && unlitTriangles == drawnTriangles
+                   ? static_cast<std::uint8_t>(storage::kNodeV2Unlit)
+                   : std::uint8_t{0};
+}
 
 /** What a v2 hierarchy is written against. */
 struct SubtreeV2Input {

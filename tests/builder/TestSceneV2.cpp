@@ -11,6 +11,7 @@
 #include <ff/storage/HierarchyCheck.h>
 #include <ff/storage/NodePageV2.h>
 #include <ff/storage/SceneFile.h>
+#include <ff/storage/VertexCodec.h>
 
 #include <gtest/gtest.h>
 #include <xxhash.h>
@@ -60,6 +61,74 @@ TriangleKey triangleKey(
     return key;
 }
 
+/** Calls `visit` with the three decoded corners of every triangle of `node`'s own
+ *  representations (prototype `p`). */
+template <typename Visit>
+void forEachOwnTriangle(
+        const storage::SceneFile& file,
+        std::span<const std::byte> nodePayload,
+        std::uint64_t nodePage,
+        const storage::NodeV2& node,
+        std::size_t p,
+        Visit&& visit) {
+    const storage::PrototypeV2& prototype = file.prototypesV2()[p];
+    std::vector<storage::RepresentationRecord> reps;
+    EXPECT_TRUE(storage::readRepresentationsV2(nodePayload, nodePage, node, reps).isOk());
+    for (const storage::RepresentationRecord& r : reps) {
+        auto geometry = file.pagePayload(r.page, storage::PageType::Geometry);
+        EXPECT_TRUE(geometry.isOk());
+        Result<storage::ClusterPageIndex> page =
+                storage::indexClusterPage(*geometry, file.pageSize());
+        EXPECT_TRUE(page.isOk()) << page.status().toString();
+        EXPECT_EQ(page->prototype, p);
+        Result<storage::ClusterRun> run =
+                storage::findClusterRun(page->clusters, r.offset, r.length, r.count);
+        EXPECT_TRUE(run.isOk()) << run.status().toString();
+        std::vector<storage::PackedVertex> vertices(page->vertexCount);
+        std::vector<std::uint8_t> indices(page->indexCount);
+        EXPECT_TRUE(
+                storage::decodeClusterPage(*geometry, *page, prototype.grid, vertices, indices)
+                        .isOk());
+        for (std::uint32_t k = run->first; k < run->first + run->count; ++k) {
+            const storage::IndexedCluster& cluster = page->clusters[k];
+            for (std::uint32_t t = 0; t < cluster.info.triangleCount; ++t) {
+                std::array<storage::PackedVertex, 3> corners;
+                for (std::uint32_t v = 0; v < 3; ++v)
+                    corners[v] =
+                            vertices[cluster.firstVertex + indices[cluster.firstIndex + 3 * t + v]];
+                visit(corners);
+            }
+        }
+    }
+}
+
+/** Reads node `index` (bounds relative to `parent`) into `node`, its page's payload into
+ *  `payload`; false after a failed expectation. */
+bool readNodeOrFail(
+        const storage::SceneFile& file,
+        std::uint32_t index,
+        const storage::NodeBox& parent,
+        storage::NodeV2& node,
+        std::span<const std::byte>& payload,
+        std::uint64_t& page) {
+    Result<storage::NodeRef> where = file.nodeLocation(index);
+    EXPECT_TRUE(where.isOk()) << where.status().toString();
+    if (!where)
+        return false;
+    auto bytes = file.pagePayload(where->page, storage::PageType::Nodes);
+    EXPECT_TRUE(bytes.isOk());
+    if (!bytes)
+        return false;
+    Result<storage::NodeV2> read = storage::readNodeV2(*bytes, where->page, where->slot, parent);
+    EXPECT_TRUE(read.isOk()) << read.status().toString();
+    if (!read)
+        return false;
+    node = *read;
+    payload = *bytes;
+    page = where->page;
+    return true;
+}
+
 /** Every prototype's triangles as a reader reaches them: nodes from the root, each node's
  *  representations, their cluster runs decoded. */
 std::vector<std::vector<TriangleKey>> decodeThroughHierarchy(const storage::SceneFile& file) {
@@ -71,47 +140,16 @@ std::vector<std::vector<TriangleKey>> decodeThroughHierarchy(const storage::Scen
         while (!pending.empty()) {
             const auto [index, parent] = pending.back();
             pending.pop_back();
-            Result<storage::NodeRef> where = file.nodeLocation(index);
-            EXPECT_TRUE(where.isOk()) << where.status().toString();
-            if (!where)
+            storage::NodeV2 node;
+            std::span<const std::byte> payload;
+            std::uint64_t page = 0;
+            if (!readNodeOrFail(file, index, parent, node, payload, page))
                 return out;
-            auto payload = file.pagePayload(where->page, storage::PageType::Nodes);
-            EXPECT_TRUE(payload.isOk());
-            Result<storage::NodeV2> node =
-                    storage::readNodeV2(*payload, where->page, where->slot, parent);
-            EXPECT_TRUE(node.isOk()) << node.status().toString();
-            if (!node)
-                return out;
-            for (std::uint32_t c = 0; c < node->childCount; ++c)
-                pending.push_back({node->firstChild + c, node->bounds});
-            std::vector<storage::RepresentationRecord> reps;
-            EXPECT_TRUE(storage::readRepresentationsV2(*payload, where->page, *node, reps).isOk());
-            for (const storage::RepresentationRecord& r : reps) {
-                auto geometry = file.pagePayload(r.page, storage::PageType::Geometry);
-                EXPECT_TRUE(geometry.isOk());
-                Result<storage::ClusterPageIndex> page =
-                        storage::indexClusterPage(*geometry, file.pageSize());
-                EXPECT_TRUE(page.isOk()) << page.status().toString();
-                EXPECT_EQ(page->prototype, p);
-                Result<storage::ClusterRun> run =
-                        storage::findClusterRun(page->clusters, r.offset, r.length, r.count);
-                EXPECT_TRUE(run.isOk()) << run.status().toString();
-                std::vector<storage::PackedVertex> vertices(page->vertexCount);
-                std::vector<std::uint8_t> indices(page->indexCount);
-                EXPECT_TRUE(storage::decodeClusterPage(
-                                    *geometry, *page, prototype.grid, vertices, indices)
-                                    .isOk());
-                for (std::uint32_t k = run->first; k < run->first + run->count; ++k) {
-                    const storage::IndexedCluster& cluster = page->clusters[k];
-                    for (std::uint32_t t = 0; t < cluster.info.triangleCount; ++t) {
-                        std::array<storage::PackedVertex, 3> corners;
-                        for (std::uint32_t v = 0; v < 3; ++v)
-                            corners[v] = vertices
-                                    [cluster.firstVertex + indices[cluster.firstIndex + 3 * t + v]];
-                        out[p].push_back(triangleKey(prototype.grid, corners));
-                    }
-                }
-            }
+            for (std::uint32_t c = 0; c < node.childCount; ++c)
+                pending.push_back({node.firstChild + c, node.bounds});
+            forEachOwnTriangle(file, payload, page, node, p, [&](const auto& corners) {
+                out[p].push_back(triangleKey(prototype.grid, corners));
+            });
         }
         std::sort(out[p].begin(), out[p].end());
     }
@@ -280,6 +318,73 @@ TEST(SceneV2Test, ChunkRootsThatHoldTrianglesAreCountedOnce) {
     ASSERT_TRUE(summary.isOk()) << summary.status().toString();
     EXPECT_EQ(summary->triangles, triangles.size());
     EXPECT_EQ(decodeThroughHierarchy(*file)[0], inputKeys(file->prototypesV2()[0].grid, triangles));
+}
+
+/** Counts, below `index`, the triangles and the unlit ones (three unlit corners), and expects
+ *  each Cell's unlit flag exactly where all of them are unlit. */
+struct UnlitCount {
+    std::uint64_t triangles = 0;
+    std::uint64_t unlit = 0;
+    std::uint64_t flagged = 0; ///< nodes with the flag
+};
+
+UnlitCount expectUnlitFlags(
+        const storage::SceneFile& file,
+        std::uint32_t index,
+        const storage::NodeBox& parent,
+        std::size_t p) {
+    UnlitCount count;
+    storage::NodeV2 node;
+    std::span<const std::byte> payload;
+    std::uint64_t page = 0;
+    if (!readNodeOrFail(file, index, parent, node, payload, page))
+        return count;
+    forEachOwnTriangle(file, payload, page, node, p, [&](const auto& corners) {
+        ++count.triangles;
+        count.unlit += std::all_of(corners.begin(), corners.end(), [](const auto& v) {
+            return storage::isUnlitNormal(v.normalOct);
+        });
+    });
+    for (std::uint32_t c = 0; c < node.childCount; ++c) {
+        const UnlitCount below = expectUnlitFlags(file, node.firstChild + c, node.bounds, p);
+        count.triangles += below.triangles;
+        count.unlit += below.unlit;
+        count.flagged += below.flagged;
+    }
+    const bool flagged = (node.flags & storage::kNodeV2Unlit) != 0;
+    EXPECT_EQ(flagged, count.triangles > 0 && count.unlit == count.triangles)
+            << "node " << index << ": " << count.unlit << " of " << count.triangles << " unlit";
+    count.flagged += flagged ? 1 : 0;
+    return count;
+}
+
+TEST(SceneV2Test, TheUnlitFlagMarksTheNodesWhoseTrianglesAreAllUnlit) {
+    // The terrain's western half unlit (KHR_materials_unlit gives its vertices the unlit code),
+    // built whole and in chunks laid out level by level: both writers set the flag.
+    const fs::path dir = freshTestDir();
+    std::vector<storage::PackedTriangle> triangles =
+            generate("terrain:triangles=200000").prototypes()[0].triangles;
+    for (storage::PackedTriangle& t : triangles)
+        if (t.vertices[0].position[0] + t.vertices[1].position[0] + t.vertices[2].position[0] < 0.0f)
+            for (storage::PackedVertex& v : t.vertices)
+                v.normalOct = storage::kUnlitNormalOct;
+    const RecordingSink scene = singlePrototypeScene(triangles);
+    BuildOptions chunked = v2Options();
+    chunked.memoryBudgetBytes = SceneBuilder::kMinimumBudgetBytes;
+    chunked.pageSize = storage::kMinPageSize;
+    EXPECT_GT(buildOrFail(scene, dir / "chunked.ffs", chunked).chunks, 4u);
+    EXPECT_EQ(buildOrFail(scene, dir / "whole.ffs", v2Options()).chunks, 1u);
+    for (const char* name : {"chunked.ffs", "whole.ffs"}) {
+        SCOPED_TRACE(name);
+        auto file = openOrFail(dir / name);
+        ASSERT_NE(file, nullptr);
+        const storage::PrototypeV2& prototype = file->prototypesV2()[0];
+        const UnlitCount count = expectUnlitFlags(*file, prototype.rootNode, prototype.bounds, 0);
+        EXPECT_EQ(count.triangles, triangles.size());
+        EXPECT_GT(count.unlit, triangles.size() / 3);
+        EXPECT_LT(count.unlit, 2 * triangles.size() / 3);
+        EXPECT_GT(count.flagged, 10u);
+    }
 }
 
 void reseal(std::vector<std::byte>& bytes, std::uint32_t pageSize, std::uint64_t page) {

@@ -26,6 +26,7 @@ struct ClusterBuildStats {
     std::uint64_t clusters = 0;
     std::uint64_t trianglesIn = 0;
     std::uint64_t trianglesKept = 0;   ///< after dropping those quantization collapsed
+    std::uint64_t trianglesUnlit = 0;  ///< of those kept, with three unlit corners
     std::uint64_t uniqueVertices = 0;  ///< after merging identical quantized vertices
     std::uint64_t clusterVertices = 0; ///< vertices over all clusters (shared ones repeat)
     std::uint64_t encodedBytes = 0;
