@@ -47,7 +47,8 @@ inline constexpr std::uint64_t kClusterLeafTriangles = 4096;
  *  octree's cells of a few thousand triangles on a heightfield include slivers where the surface
  *  crosses a cell's middle height, tens of units wide and two triangles deep, that cover a
  *  pixel from far and are drawn whole, each pulling in a page. From leaves this large the slabs
- *  cut the surface instead (docs/results, "Cluster nodes": the top-down frame 41 % smaller). */
+ *  cut the surface instead (docs/results, "Cluster nodes from larger leaves": the 10^9 terrain
+ *  filling the screen from above 50.2 MB instead of 85.4). */
 inline constexpr std::uint64_t kClusterNodesLeafTriangles = 65536;
 
 /** How the builder subdivides and bakes. The defaults are the ones the benchmarks chose. */
