@@ -248,6 +248,16 @@ struct OcclusionTraversal::Impl {
     std::vector<Status> failures; ///< both passes' new failures
     std::uint32_t frameNumber = 0;
 
+    /** What a redrawable frame started from (beginRedrawableFrame()). */
+    struct FrameStart {
+        std::unordered_map<NodeKey, History, NodeKeyHash> history;
+        std::optional<Camera> lastCamera;
+        std::uint32_t frameNumber = 0;
+    };
+    bool redrawable = false;
+    bool redraw = false;
+    std::optional<FrameStart> frameStart;
+
     // Per-frame state.
     const FrameContext* frame = nullptr;
     TraversalServices* services = nullptr;
@@ -305,6 +315,22 @@ const IVisibility& OcclusionTraversal::history() const noexcept {
     return mImpl->historyView;
 }
 
+void OcclusionTraversal::beginRedrawableFrame() noexcept {
+    mImpl->redrawable = true;
+    mImpl->redraw = false;
+    mImpl->frameStart.reset();
+}
+
+void OcclusionTraversal::redrawLastFrame() noexcept {
+    mImpl->redraw = mImpl->redrawable;
+}
+
+void OcclusionTraversal::endRedrawableFrame() noexcept {
+    mImpl->redrawable = false;
+    mImpl->redraw = false;
+    mImpl->frameStart.reset();
+}
+
 Status OcclusionTraversal::Impl::traverse(
         const FrameContext& frameContext, TraversalServices frameServices, FrameStats& frameStats) {
     if (!frameServices.occlusion || frameContext.selection.method != Method::Hierarchical)
@@ -314,6 +340,14 @@ Status OcclusionTraversal::Impl::traverse(
     frame = &frameContext;
     services = &frameServices;
     stats = &frameStats;
+    if (redraw && frameStart) {
+        history = frameStart->history;
+        lastCamera = frameStart->lastCamera;
+        frameNumber = frameStart->frameNumber;
+    } else if (redrawable && !frameStart) {
+        frameStart = FrameStart{history, lastCamera, frameNumber};
+    }
+    redraw = false;
     ++frameNumber;
     const storage::FileHeader& header = scene.header();
     if (lastCamera && jumped(*lastCamera, frame->camera, toVec3(header.boundsMin), toVec3(header.boundsMax)))

@@ -410,6 +410,17 @@ Status StreamingSession::Impl::untilComplete(const FrameStats& stats, bool& stal
         return decodeStage ? decodeStage->stats().requested + decodeStage->stats().refused : 0;
     };
     std::uint64_t work = decodeWork();
+    // Only the last pass's occlusion answers stay in the history (OcclusionTraversal.h).
+    struct RedrawableFrame {
+        OcclusionTraversal& traversal;
+        explicit RedrawableFrame(OcclusionTraversal& t)
+            : traversal(t) {
+            traversal.beginRedrawableFrame();
+        }
+        ~RedrawableFrame() { traversal.endRedrawableFrame(); }
+        RedrawableFrame(const RedrawableFrame&) = delete;
+        RedrawableFrame& operator=(const RedrawableFrame&) = delete;
+    } const redrawable(*occlusionTraversal);
     FF_RETURN_IF_ERROR(draw());
     // A complete frame also lacks no page: --method full defers nothing, it leaves pages out
     // (format 2: also pages not decoded yet, which it refuses to upload).
@@ -428,6 +439,7 @@ Status StreamingSession::Impl::untilComplete(const FrameStats& stats, bool& stal
         cache->drain();
         stalled = true;
         work = decodeWork();
+        occlusionTraversal->redrawLastFrame();
         FF_RETURN_IF_ERROR(draw());
         if (cache->stats().completed != readBefore) {
             leastLacking = lacking(); // a read can deepen the cut: start counting afresh
@@ -445,6 +457,7 @@ Status StreamingSession::Impl::untilComplete(const FrameStats& stats, bool& stal
             // arena, and each try evicts what the next needs decoded again. A frame that has
             // to be complete decodes the rest as it draws, on this thread, once.
             renderer->setDecodeOnDraw(true);
+            occlusionTraversal->redrawLastFrame();
             const Status drawn = draw();
             renderer->setDecodeOnDraw(false);
             return drawn;

@@ -60,6 +60,18 @@ public:
      *  them, so what is hidden is not fetched ahead either). */
     [[nodiscard]] const IVisibility& history() const noexcept;
 
+    /**
+     * A frame that must be complete is drawn again until it lacks no page, and each pass would
+     * enter its answers in the history: a pass without the pages it needs finds nodes visible
+     * that are not (nothing drawn yet to hide them), and coherence then keeps drawing them for
+     * frames. Between beginRedrawableFrame() and endRedrawableFrame(), the first traverse()
+     * keeps the state it started from and redrawLastFrame() makes the next one start from it
+     * again, so only the last pass's answers stay.
+     */
+    void beginRedrawableFrame() noexcept;
+    void redrawLastFrame() noexcept;
+    void endRedrawableFrame() noexcept;
+
 private:
     struct Impl;
     std::unique_ptr<Impl> mImpl;
