@@ -95,6 +95,22 @@ private:
     IPageAccess& mPages;
 };
 
+// Brackets the passes of a frame drawn until it is complete: only the last pass's occlusion
+// answers stay in the history (OcclusionTraversal.h), on every path out.
+class RedrawableFrame {
+public:
+    explicit RedrawableFrame(OcclusionTraversal& traversal)
+        : mTraversal(traversal) {
+        mTraversal.beginRedrawableFrame();
+    }
+    ~RedrawableFrame() { mTraversal.endRedrawableFrame(); }
+    RedrawableFrame(const RedrawableFrame&) = delete;
+    RedrawableFrame& operator=(const RedrawableFrame&) = delete;
+
+private:
+    OcclusionTraversal& mTraversal;
+};
+
 } // namespace
 
 struct StreamingSession::Impl {
@@ -410,17 +426,7 @@ Status StreamingSession::Impl::untilComplete(const FrameStats& stats, bool& stal
         return decodeStage ? decodeStage->stats().requested + decodeStage->stats().refused : 0;
     };
     std::uint64_t work = decodeWork();
-    // Only the last pass's occlusion answers stay in the history (OcclusionTraversal.h).
-    struct RedrawableFrame {
-        OcclusionTraversal& traversal;
-        explicit RedrawableFrame(OcclusionTraversal& t)
-            : traversal(t) {
-            traversal.beginRedrawableFrame();
-        }
-        ~RedrawableFrame() { traversal.endRedrawableFrame(); }
-        RedrawableFrame(const RedrawableFrame&) = delete;
-        RedrawableFrame& operator=(const RedrawableFrame&) = delete;
-    } const redrawable(*occlusionTraversal);
+    const RedrawableFrame redrawable(*occlusionTraversal);
     FF_RETURN_IF_ERROR(draw());
     // A complete frame also lacks no page: --method full defers nothing, it leaves pages out
     // (format 2: also pages not decoded yet, which it refuses to upload).
