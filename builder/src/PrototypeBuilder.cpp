@@ -23,7 +23,7 @@ namespace {
 
 LeafShapeV2 leafShapeV2(const HierarchyParams& params, const storage::PositionGrid& grid, unsigned threads) {
     LeafShapeV2 shape;
-    shape.leafTriangles = params.clusterLeafTriangles;
+    shape.leafTriangles = params.leafTriangles();
     shape.clusterNodes = params.clusterNodes;
     shape.grid = &grid;
     shape.bakeResolution = params.bakeResolution;

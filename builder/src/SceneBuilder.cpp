@@ -149,7 +149,7 @@ Result<std::unique_ptr<SceneBuilder>> SceneBuilder::create(
     impl->report.threads = impl->options.threads;
     impl->report.decomposition = std::string(decompositionName(options.hierarchy.decomposition));
     if (options.formatVersion == storage::kFormatVersion2) {
-        impl->report.clusterLeafTriangles = options.hierarchy.clusterLeafTriangles;
+        impl->report.clusterLeafTriangles = options.hierarchy.leafTriangles();
         impl->report.clusterNodes = options.hierarchy.clusterNodes;
     }
     impl->report.spillCodec = std::string(spillCodecName(options.spillCodec));

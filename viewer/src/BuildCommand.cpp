@@ -42,7 +42,7 @@ struct BuildArgs {
     std::string tempDirectory;
     std::string spill = "compact";
     unsigned format = 1;
-    std::optional<std::uint64_t> clusterLeafTriangles; ///< by --cluster-nodes when not given
+    std::optional<std::uint64_t> clusterLeafTriangles; ///< unset: HierarchyParams::leafTriangles()
     bool clusterNodes = false;
     bool quiet = false;
 };
@@ -82,8 +82,7 @@ int runBuild(const BuildArgs& args) {
         return reportError("build", Status(ErrorCode::InvalidArgument, "--spill must be compact or raw"));
     options.spillCodec = *spill;
     options.formatVersion = args.format;
-    options.hierarchy.clusterLeafTriangles = args.clusterLeafTriangles.value_or(
-            args.clusterNodes ? builder::kClusterNodesLeafTriangles : builder::kClusterLeafTriangles);
+    options.hierarchy.clusterLeafTriangles = args.clusterLeafTriangles;
     options.hierarchy.clusterNodes = args.clusterNodes;
     options.hierarchy.bakeResolution = args.bakeResolution;
     options.hierarchy.bakeInnerDirect = args.bakeInner == "direct";

@@ -73,14 +73,21 @@ struct HierarchyParams {
     /** Format 2 only: a subtree of at most this many triangles is written as one leaf of whole
      *  clusters, so a node's 48-byte record is spread over many triangles (the v2 estimate of
      *  docs/results "Compact geometry" was measured at 4096). 0 keeps the hierarchy's leaves.
-     *  With clusterNodes, kClusterNodesLeafTriangles is the better choice. */
-    std::uint64_t clusterLeafTriangles = kClusterLeafTriangles;
+     *  Unset: kClusterLeafTriangles, or kClusterNodesLeafTriangles with clusterNodes
+     *  (leafTriangles()). */
+    std::optional<std::uint64_t> clusterLeafTriangles;
     /** Format 2 only: each leaf gets a tree of nodes, at most four wide, down to pieces of
      *  about a cluster, each with its bounds and cube, so a cut can stop inside a leaf
      *  (builder/src/ClusterNodes.h): far views draw far fewer triangles for 0.6-1 byte a
      *  triangle more (docs/results "Cluster nodes"). Off by default: it takes the scanned
      *  models over issue 16's 8 bytes a triangle, and teleports gain nothing from it. */
     bool clusterNodes = false;
+
+    /** clusterLeafTriangles, or its default for clusterNodes. */
+    [[nodiscard]] std::uint64_t leafTriangles() const noexcept {
+        return clusterLeafTriangles.value_or(
+                clusterNodes ? kClusterNodesLeafTriangles : kClusterLeafTriangles);
+    }
 };
 
 } // namespace ff::builder
