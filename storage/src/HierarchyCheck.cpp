@@ -181,8 +181,13 @@ Result<HierarchySummary> checkHierarchyV2(
                 FF_ASSIGN_OR_RETURN(
                         const std::uint64_t triangles,
                         clusterPages.trianglesOf(r, static_cast<std::uint32_t>(at.prototype)));
-                trianglesOf[static_cast<std::size_t>(at.prototype)] += triangles;
                 ++summary.representations;
+                if (isStandIn(r)) { // a simplified copy of what is below: not stored triangles
+                    ++summary.standIns;
+                    summary.standInTriangles += triangles;
+                    continue;
+                }
+                trianglesOf[static_cast<std::size_t>(at.prototype)] += triangles;
             }
         }
         if (node.childCount > 0) {

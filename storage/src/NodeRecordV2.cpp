@@ -176,10 +176,13 @@ Status encodeRepresentation(const RepresentationRecord& r, std::span<std::byte> 
     if (out.size() < kRepresentationRecordSize)
         return Status(ErrorCode::InvalidArgument, "a representation record needs 20 bytes");
     if (r.kind < RepresentationKind::Clusters || r.kind > RepresentationKind::VisibleSet ||
-        r.flags != 0 || !std::isfinite(r.parameter))
+        (r.flags & ~kKnownRepresentationFlags) != 0 || !std::isfinite(r.parameter))
         return Status(
                 ErrorCode::InvalidArgument,
                 "unknown representation kind or flags, or a non-finite parameter");
+    if (isStandIn(r) && (r.kind != RepresentationKind::Clusters || r.parameter < 0.0f))
+        return Status(
+                ErrorCode::InvalidArgument, "a stand-in is clusters with an error of at least 0");
     const PackedRepresentation p{
             static_cast<std::uint8_t>(r.kind),
             r.flags,
@@ -205,12 +208,17 @@ Result<RepresentationRecord> decodeRepresentation(std::span<const std::byte> byt
         return Status(
                 ErrorCode::Corrupt,
                 "representation record: unknown kind " + std::to_string(p.kind));
-    if (p.flags != 0)
+    if ((p.flags & ~kKnownRepresentationFlags) != 0)
         return Status(
                 ErrorCode::Corrupt,
                 "representation record: unknown flags " + std::to_string(p.flags));
     if (!std::isfinite(p.parameter))
         return Status(ErrorCode::Corrupt, "representation record: non-finite parameter");
+    if ((p.flags & kRepresentationStandIn) != 0 &&
+        (p.kind != static_cast<std::uint8_t>(RepresentationKind::Clusters) || p.parameter < 0.0f))
+        return Status(
+                ErrorCode::Corrupt,
+                "representation record: a stand-in that is not clusters or has a negative error");
     return RepresentationRecord{
             static_cast<RepresentationKind>(p.kind),
             p.flags,

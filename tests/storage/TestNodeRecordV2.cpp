@@ -2,6 +2,7 @@
 
 #include <gtest/gtest.h>
 
+#include <cstring>
 #include <random>
 #include <vector>
 
@@ -146,7 +147,20 @@ TEST(NodeRecordV2Test, RepresentationRecordsRoundTripAndRefuseUnknownKinds) {
     bytes[0] = std::byte{9};
     EXPECT_FALSE(decodeRepresentation(bytes).isOk());
     bytes[0] = std::byte{1};
-    bytes[1] = std::byte{1};
+    bytes[1] = std::byte{2}; // an unknown flag
+    EXPECT_FALSE(decodeRepresentation(bytes).isOk());
+    bytes[1] = std::byte{kRepresentationStandIn};
+    EXPECT_TRUE(decodeRepresentation(bytes).isOk()) << "a stand-in of clusters, error 0.125";
+    bytes[0] = std::byte{2};
+    EXPECT_FALSE(decodeRepresentation(bytes).isOk()) << "only clusters stand in";
+    RepresentationRecord standIn{RepresentationKind::Clusters, kRepresentationStandIn, 3, 5, 16, 200, 0.5f};
+    ASSERT_TRUE(encodeRepresentation(standIn, bytes).isOk());
+    EXPECT_EQ(decodeRepresentation(bytes).value(), standIn);
+    EXPECT_TRUE(isStandIn(standIn));
+    standIn.parameter = -0.5f; // an error below 0
+    EXPECT_FALSE(encodeRepresentation(standIn, bytes).isOk());
+    const float negative = -0.5f;
+    std::memcpy(bytes.data() + 16, &negative, sizeof negative);
     EXPECT_FALSE(decodeRepresentation(bytes).isOk());
     RepresentationRecord nan = r;
     nan.parameter = NAN;

@@ -70,6 +70,14 @@ enum class RepresentationKind : std::uint8_t {
     VisibleSet = 5,      ///< reserved for precomputed visibility
 };
 
+enum RepresentationFlags : std::uint8_t {
+    /** A simplified stand-in for the node's whole subtree (its own payloads and everything
+     *  below it), drawn instead of them where its error is small enough on screen: Clusters
+     *  only; `parameter` is its error in the hierarchy's units (FORMAT.md §5.3). */
+    kRepresentationStandIn = 1u << 0,
+};
+inline constexpr std::uint8_t kKnownRepresentationFlags = kRepresentationStandIn;
+
 /** One payload of a node: `length` bytes at byte `offset` of payload page `page`. */
 struct RepresentationRecord {
     RepresentationKind kind = RepresentationKind::Clusters;
@@ -78,8 +86,8 @@ struct RepresentationRecord {
     std::uint32_t page = 0;
     std::uint32_t offset = 0;
     std::uint32_t length = 0;
-    /** The kind's own parameter: the error a simplified payload promises (scene units), a
-     *  splat spacing, ...; 0 where the kind has none. */
+    /** The kind's own parameter: a stand-in's error (its hierarchy's units, >= 0), a splat
+     *  spacing, ...; 0 where the kind has none. */
     float parameter = 0.0f;
 
     friend bool operator==(const RepresentationRecord&, const RepresentationRecord&) = default;
@@ -100,8 +108,14 @@ encodeNodeV2(const NodeV2& node, const NodeBox& parent, std::span<std::byte> out
 [[nodiscard]] Result<NodeV2> decodeNodeV2(std::span<const std::byte> bytes, const NodeBox& parent);
 
 [[nodiscard]] Status encodeRepresentation(const RepresentationRecord& r, std::span<std::byte> out);
-/** Reads and checks the record at the start of `bytes`: a known kind, no flags, a finite
- *  parameter; where it points is checked by who reads the page. */
+/** Reads and checks the record at the start of `bytes`: a known kind, known flags (a stand-in
+ *  only of clusters, its error >= 0), a finite parameter; where it points is checked by who
+ *  reads the page. */
 [[nodiscard]] Result<RepresentationRecord> decodeRepresentation(std::span<const std::byte> bytes);
+
+/** Whether `r` is a subtree's stand-in (kRepresentationStandIn), not the node's own payload. */
+constexpr bool isStandIn(const RepresentationRecord& r) noexcept {
+    return (r.flags & kRepresentationStandIn) != 0;
+}
 
 } // namespace ff::storage
