@@ -27,6 +27,20 @@ Status ClusterPagePacker::closeOldest() {
     return Status::ok();
 }
 
+Status ClusterPagePacker::placeStandIn(
+        std::span<const std::byte> clusters,
+        std::uint32_t count,
+        float error,
+        std::vector<storage::RepresentationRecord>& out) {
+    const std::size_t first = out.size();
+    FF_RETURN_IF_ERROR(place(clusters, count, out));
+    for (std::size_t r = first; r < out.size(); ++r) {
+        out[r].flags = static_cast<std::uint8_t>(out[r].flags | storage::kRepresentationStandIn);
+        out[r].parameter = error;
+    }
+    return Status::ok();
+}
+
 Status ClusterPagePacker::finish() {
     while (!mOpen.empty())
         FF_RETURN_IF_ERROR(closeOldest());

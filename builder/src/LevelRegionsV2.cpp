@@ -37,6 +37,7 @@ Result<EncodedRun> encodeRun(
 Result<ChunkClustersV2>
 encodeChunkClusters(LevelledSubtree& chunk, const storage::PositionGrid& grid) {
     ChunkClustersV2 out;
+    FF_ASSERT(chunk.levels.size() > 0);
     out.levels.resize(chunk.levels.size());
     ClusterEncoder encoder;
     for (std::size_t d = 0; d < chunk.levels.size(); ++d) {
@@ -56,8 +57,31 @@ encodeChunkClusters(LevelledSubtree& chunk, const storage::PositionGrid& grid) {
                     const EncodedRun r, encodeRun(encoder, run, grid, encoded.bytes, out.stats));
             encoded.runs.push_back(r);
         }
+        // A level's stand-ins after its own runs, in its bytes.
+        const auto encodeStandIn = [&](const std::optional<StandIn>& standIn) -> Result<EncodedRun> {
+            if (!standIn)
+                return EncodedRun{};
+            FF_ASSIGN_OR_RETURN(
+                    EncodedRun r,
+                    encodeRun(encoder, standIn->triangles, grid, encoded.bytes, out.standInStats));
+            r.error = standIn->error;
+            out.standIns += r.clusters > 0 ? 1 : 0;
+            return r;
+        };
+        if (d == 0) {
+            FF_ASSIGN_OR_RETURN(out.rootStandIn, encodeStandIn(chunk.rootStandIn));
+        }
+        if (!level.standIns.empty()) {
+            encoded.standIns.reserve(level.standIns.size());
+            for (const std::optional<StandIn>& standIn : level.standIns) {
+                FF_ASSIGN_OR_RETURN(const EncodedRun r, encodeStandIn(standIn));
+                encoded.standIns.push_back(r);
+            }
+        }
+        chunk.levels[d].standIns = std::vector<std::optional<StandIn>>();
     }
     chunk.triangles = std::vector<storage::PackedTriangle>(); // its memory, not just its elements
+    chunk.rootStandIn.reset();
     return out;
 }
 
@@ -152,6 +176,19 @@ Status LevelRegionsV2::append(LevelledSubtree& chunk, ChunkClustersV2& clusters)
         const auto bytes = std::span(clusters.levels[0].bytes)
                                    .subspan(clusters.root.offset, clusters.root.bytes);
         FF_RETURN_IF_ERROR(r.packer.place(bytes, clusters.root.clusters, root.representations));
+    }
+    if (const EncodedRun& standIn = clusters.rootStandIn; standIn.clusters > 0) {
+        Region& r = region(chunk.rootLevel);
+        FF_RETURN_IF_ERROR(r.packer.placeStandIn(
+                std::span(clusters.levels[0].bytes).subspan(standIn.offset, standIn.bytes),
+                standIn.clusters,
+                standIn.error,
+                root.representations));
+    }
+    root.standInSource = std::move(chunk.rootSource);
+    mStandIns += clusters.standIns;
+    mStandInStats += clusters.standInStats;
+    {
         if (root.representations.size() > 255)
             return Status(
                     ErrorCode::Unsupported,
@@ -178,6 +215,14 @@ Status LevelRegionsV2::append(LevelledSubtree& chunk, ChunkClustersV2& clusters)
                         std::span(encoded.bytes).subspan(run.offset, run.bytes),
                         run.clusters,
                         r.representations));
+            if (!encoded.standIns.empty() && encoded.standIns[i].clusters > 0) {
+                const EncodedRun& standIn = encoded.standIns[i];
+                FF_RETURN_IF_ERROR(r.packer.placeStandIn(
+                        std::span(encoded.bytes).subspan(standIn.offset, standIn.bytes),
+                        standIn.clusters,
+                        standIn.error,
+                        r.representations));
+            }
             repCount[i] = static_cast<std::uint32_t>(r.representations.size()) - first;
             if (repCount[i] > 255)
                 return Status(
@@ -366,6 +411,7 @@ PlacedNodeV2 LevelRegionsV2::placedRoot(std::size_t chunk, std::uint32_t node) c
     placed.storedTriangles = root.storedTriangles;
     placed.drawnTriangles = root.drawnTriangles;
     placed.unlitTriangles = root.unlitTriangles;
+    placed.standInSource = root.standInSource;
     return placed;
 }
 

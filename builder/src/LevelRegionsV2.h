@@ -43,6 +43,7 @@ struct EncodedRun {
     std::uint32_t clusters = 0;
     std::uint64_t kept = 0; ///< triangles the codec kept
     std::uint64_t unlit = 0; ///< of them, unlit
+    float error = 0.0f;      ///< a stand-in's (StandIns.h)
 };
 
 /** A chunk's clusters, level by level, encoded on its worker thread. */
@@ -50,14 +51,20 @@ struct ChunkClustersV2 {
     struct Level {
         std::vector<std::byte> bytes;
         std::vector<EncodedRun> runs; ///< one per record of the level, in order
+        /** Per record, its stand-in's clusters (none: no clusters); empty if none has one. */
+        std::vector<EncodedRun> standIns;
     };
     std::vector<Level> levels; ///< as LevelledSubtree::levels
     EncodedRun root;           ///< the root's own triangles, in levels[0].bytes
-    ClusterBuildStats stats;
+    EncodedRun rootStandIn;    ///< the root's stand-in, in levels[0].bytes
+    ClusterBuildStats stats;   ///< the nodes' own triangles
+    ClusterBuildStats standInStats;
+    std::uint64_t standIns = 0;
 };
 
-/** Encodes every record's triangles of `chunk` (and its root's) into clusters on `grid`, then
- *  frees the chunk's triangles. Thread-safe for different chunks. */
+/** Encodes every record's triangles of `chunk` (and its root's) into clusters on `grid`, and
+ *  their stand-ins, then frees the chunk's triangles and stand-ins. Thread-safe for different
+ *  chunks. */
 [[nodiscard]] Result<ChunkClustersV2>
 encodeChunkClusters(LevelledSubtree& chunk, const storage::PositionGrid& grid);
 
@@ -96,6 +103,8 @@ public:
     [[nodiscard]] std::uint64_t nodes() const noexcept { return mNodes; }
     [[nodiscard]] std::uint64_t leafNodes() const noexcept { return mLeafNodes; }
     [[nodiscard]] std::uint64_t storedTriangles() const noexcept { return mStoredTriangles; }
+    [[nodiscard]] std::uint64_t standIns() const noexcept { return mStandIns; }
+    [[nodiscard]] const ClusterBuildStats& standInStats() const noexcept { return mStandInStats; }
     [[nodiscard]] std::uint64_t nodePages() const noexcept;
     [[nodiscard]] std::uint64_t geometryPages() const noexcept;
     [[nodiscard]] std::uint64_t spillBytes() const noexcept;
@@ -110,6 +119,7 @@ private:
         std::vector<storage::RepresentationRecord>
                 representations; ///< local pages of region `level`
         std::uint64_t storedTriangles = 0;
+        StandInSource standInSource{{}, 0.0f, false}; ///< for a stand-in above it
         double drawnTriangles = 0.0;
         double unlitTriangles = 0.0; ///< of drawnTriangles
         std::uint32_t absoluteFirstChild = 0; ///< set by finish()
@@ -129,6 +139,8 @@ private:
     std::uint64_t mNodes = 0;
     std::uint64_t mLeafNodes = 0;
     std::uint64_t mStoredTriangles = 0;
+    std::uint64_t mStandIns = 0;
+    ClusterBuildStats mStandInStats;
     std::uint32_t mMaxLevel = 0;
 };
 

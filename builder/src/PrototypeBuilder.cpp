@@ -107,7 +107,16 @@ Result<ChunkOutput> buildChunk(
     out.leafNodes = built.leafNodes;
     if (positionGrid != nullptr)
         FF_RETURN_IF_ERROR(shapeLeavesV2(built.nodes, triangles, leafShapeV2(params, *positionGrid, 1)));
-    out.encoded = encodeLevels(std::move(built.nodes), std::move(triangles));
+    std::vector<std::optional<StandIn>> standIns;
+    StandInSource rootSource{{}, 0.0f, false};
+    if (positionGrid != nullptr && params.standIns) {
+        FF_ASSIGN_OR_RETURN(
+                standIns, buildStandIns(built.nodes, triangles, *positionGrid, {}, 1, &rootSource));
+        if (rootSource.triangles.size() > kMaxCarriedStandInSource)
+            rootSource = StandInSource{{}, 0.0f, false};
+    }
+    out.encoded = encodeLevels(std::move(built.nodes), std::move(triangles), std::move(standIns));
+    out.encoded.rootSource = std::move(rootSource);
     if (positionGrid != nullptr) {
         FF_ASSIGN_OR_RETURN(ChunkClustersV2 clusters, encodeChunkClusters(out.encoded, *positionGrid));
         out.clusters = std::move(clusters);
@@ -221,6 +230,7 @@ Result<PrototypeBuildResult> PrototypeBuilder::writeInMemoryV2(
     input.grid = &encoding.grid;
     input.rootParent = {{boundsMin.x, boundsMin.y, boundsMin.z}, {boundsMax.x, boundsMax.y, boundsMax.z}};
     input.threads = mThreads;
+    input.standIns = mParams.standIns;
     FF_RETURN_IF_ERROR(shapeLeavesV2(built.nodes, all, leafShapeV2(mParams, encoding.grid, mThreads)));
     PrototypeBuildResult result;
     result.summary = std::move(built.summary);
@@ -234,6 +244,8 @@ Result<PrototypeBuildResult> PrototypeBuilder::writeInMemoryV2(
     result.maxDepth = written.maxLevel;
     result.chunks = 1;
     result.clusters = written.clusters;
+    result.standIns = written.standIns;
+    result.standInClusters = written.standInClusters;
     result.record.boundsMin = input.rootParent.min;
     result.record.boundsMax = input.rootParent.max;
     result.record.nodeCount = written.nodes;
@@ -278,10 +290,15 @@ Result<PrototypeBuildResult> PrototypeBuilder::finishChunkedV2(
     input.grid = &encoding.grid;
     input.rootParent = rootParent;
     input.placed = placed;
+    input.threads = mThreads;
+    input.standIns = mParams.standIns;
     FF_ASSIGN_OR_RETURN(
             const SubtreeV2Result written,
             writeSubtreeV2(mWriter, *mNodePageTable, std::move(nodes), ownTriangles, input));
     result.clusters += written.clusters;
+    result.standIns += written.standIns + levels.standIns();
+    result.standInClusters += written.standInClusters;
+    result.standInClusters += levels.standInStats();
     result.nodes = written.nodes + levels.nodes(); // the chunk roots are the tree above's
     result.leafNodes = written.leafNodes + levels.leafNodes();
     result.geometryPages = written.geometryPages + levels.geometryPages();

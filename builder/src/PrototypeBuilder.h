@@ -41,6 +41,8 @@ struct PrototypeBuildResult {
     storage::PrototypeRecord record{}; ///< v1's record; in a v2 build its root is not set
     storage::PrototypeV2 recordV2{};   ///< a v2 build's record
     ClusterBuildStats clusters;        ///< a v2 build's encoding
+    std::uint64_t standIns = 0;        ///< a v2 build's stand-ins (StandIns.h)
+    ClusterBuildStats standInClusters; ///< and their encoding
     PrototypeSummary summary;
     std::uint64_t nodes = 0;
     std::uint64_t leafNodes = 0;

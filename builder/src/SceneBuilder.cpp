@@ -115,6 +115,8 @@ Result<std::unique_ptr<SceneBuilder>> SceneBuilder::create(
         return Status(ErrorCode::InvalidArgument, "cube cost and large-triangle tolerance must be positive");
     if (options.formatVersion != storage::kFormatVersion && options.formatVersion != storage::kFormatVersion2)
         return Status(ErrorCode::InvalidArgument, "format version must be 1 or 2");
+    if (options.hierarchy.standIns && options.formatVersion != storage::kFormatVersion2)
+        return Status(ErrorCode::InvalidArgument, "stand-ins need format 2 (--format 2)");
 
     auto impl = std::make_unique<Impl>();
     impl->outputPath = outputPath;
@@ -151,6 +153,7 @@ Result<std::unique_ptr<SceneBuilder>> SceneBuilder::create(
     if (options.formatVersion == storage::kFormatVersion2) {
         impl->report.clusterLeafTriangles = options.hierarchy.leafTriangles();
         impl->report.clusterNodes = options.hierarchy.clusterNodes;
+        impl->report.standIns = options.hierarchy.standIns;
     }
     impl->report.spillCodec = std::string(spillCodecName(options.spillCodec));
     return std::unique_ptr<SceneBuilder>(new SceneBuilder(std::move(impl)));
@@ -315,7 +318,11 @@ Result<BuildReport> SceneBuilder::finish() {
         report.clusters += built.clusters.clusters;
         report.wideClusters += built.clusters.wideClusters;
         report.clusterVertices += built.clusters.clusterVertices;
-        report.clusterBytes += built.clusters.encodedBytes;
+        report.clusterBytes += built.clusters.encodedBytes + built.standInClusters.encodedBytes;
+        report.clusters += built.standInClusters.clusters;
+        report.standInNodes += built.standIns;
+        report.standInTriangles += built.standInClusters.trianglesKept;
+        report.standInBytes += built.standInClusters.encodedBytes;
         summaries.push_back(std::move(built.summary));
         names.push_back(proto.name);
         report.storedTriangles += built.record.triangleCount;
@@ -475,6 +482,7 @@ std::string buildReportJson(const BuildReport& r) {
             {"decomposition", r.decomposition},
             {"cluster_leaf_triangles", r.clusterLeafTriangles},
             {"cluster_nodes", r.clusterNodes},
+            {"stand_ins", {{"enabled", r.standIns}, {"nodes", r.standInNodes}, {"triangles", r.standInTriangles}, {"bytes", r.standInBytes}}},
             {"nodes", r.nodes},
             {"leaf_nodes", r.leafNodes},
             {"depth", r.maxDepth},

@@ -176,8 +176,12 @@ EncodedSubtree encodeSubtree(
     return out;
 }
 
-LevelledSubtree encodeLevels(std::vector<BuildNode> nodes, std::vector<storage::PackedTriangle> triangles) {
+LevelledSubtree encodeLevels(
+        std::vector<BuildNode> nodes,
+        std::vector<storage::PackedTriangle> triangles,
+        std::vector<std::optional<StandIn>> standIns) {
     FF_ASSERT(!nodes.empty());
+    FF_ASSERT(standIns.empty() || standIns.size() == nodes.size());
     const BreadthFirst bf = breadthFirst(nodes);
     const bool ordered = orderGeometryBreadthFirst(nodes, bf.order, triangles);
     FF_ASSERT(ordered); // PrototypeBuilder keeps chunks below 2^32 triangles
@@ -212,6 +216,8 @@ LevelledSubtree encodeLevels(std::vector<BuildNode> nodes, std::vector<storage::
     // The root is kept back; every other record goes to its level, and the sibling blocks
     // follow the breadth-first order, the root's first.
     out.root = nodes[0];
+    if (!standIns.empty())
+        out.rootStandIn = std::move(standIns[0]);
     if (out.root.childCount > 0) {
         out.levels[1].blocks.push_back(static_cast<std::uint8_t>(out.root.childCount));
         const auto first = position[out.root.firstChild] - static_cast<std::uint32_t>(bf.levelEnd[0]);
@@ -232,6 +238,10 @@ LevelledSubtree encodeLevels(std::vector<BuildNode> nodes, std::vector<storage::
             r.geometryCount = static_cast<std::uint32_t>(node.triangleCount);
         }
         out.levels[d].records.push_back(r);
+        if (!standIns.empty()) {
+            out.levels[d].standIns.resize(out.levels[d].records.size() - 1);
+            out.levels[d].standIns.push_back(std::move(standIns[bf.order[i]]));
+        }
         ++out.nodeCount;
     }
     for (const BuildNode& node : nodes)

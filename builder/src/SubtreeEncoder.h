@@ -1,12 +1,14 @@
 #pragma once
 
 #include "OctreeBuilder.h"
+#include "StandIns.h"
 
 #include <ff/storage/SceneFormat.h>
 #include <ff/storage/SceneWriter.h>
 #include <ff/storage/Status.h>
 
 #include <cstdint>
+#include <optional>
 #include <vector>
 
 namespace ff::builder {
@@ -59,6 +61,8 @@ struct LevelledSubtree {
         std::vector<std::uint8_t> blocks;         ///< their sizes, in order
         std::uint64_t triangleBegin = 0;          ///< the level's range of `triangles`
         std::uint64_t triangleCount = 0;
+        /** Format 2: per record, its stand-in (StandIns.h); empty when none or not asked. */
+        std::vector<std::optional<StandIn>> standIns;
     };
     std::uint32_t rootLevel = 0;                    ///< octree level of levels[0]
     std::vector<Level> levels;                      ///< levels[d]: level rootLevel + d (levels[0]: no records)
@@ -66,6 +70,9 @@ struct LevelledSubtree {
     /** The root: its children (placedChildren) and its triangles (placedTriangles) are in the
      *  levels, its record is written with the tree above the chunks. */
     BuildNode root;
+    std::optional<StandIn> rootStandIn; ///< format 2: the root's, if it has one
+    /** Format 2: what the root's subtree gives a stand-in above it. */
+    StandInSource rootSource{{}, 0.0f, false};
     std::uint64_t nodeCount = 0; ///< records in levels (the root not included)
     std::uint32_t maxLevel = 0;  ///< deepest level
 };
@@ -75,7 +82,10 @@ struct LevelledSubtree {
  * and triangles in breadth-first order (encodeSubtree()'s order). The chunk must be below 2^32
  * triangles. Takes ownership of the triangles.
  */
-LevelledSubtree encodeLevels(std::vector<BuildNode> nodes, std::vector<storage::PackedTriangle> triangles);
+LevelledSubtree encodeLevels(
+        std::vector<BuildNode> nodes,
+        std::vector<storage::PackedTriangle> triangles,
+        std::vector<std::optional<StandIn>> standIns = {});
 
 /** Writes the subtree's pages and makes its page numbers final. */
 [[nodiscard]] Status commitSubtree(storage::SceneWriter& writer, EncodedSubtree& subtree);

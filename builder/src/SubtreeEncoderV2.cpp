@@ -74,26 +74,21 @@ struct EncodedPayload {
     ClusterBuildStats stats;
 };
 
-/** Encodes the nodes at positions `work` of `order` into `out` (by position) on `threads`
+/** Encodes `runs[k]` (by position; empty ones are skipped) into `out[k]` on `threads`
  *  threads. */
 Status encodePayloads(
-        const std::vector<BuildNode>& nodes,
-        const std::vector<std::uint32_t>& order,
-        const std::vector<std::size_t>& work,
-        std::span<const storage::PackedTriangle> triangles,
+        const std::vector<std::span<const storage::PackedTriangle>>& runs,
         const storage::PositionGrid& grid,
         unsigned threads,
         std::vector<EncodedPayload>& out) {
+    std::vector<std::size_t> work;
+    for (std::size_t k = 0; k < runs.size(); ++k)
+        if (!runs[k].empty())
+            work.push_back(k);
     return parallelFor(work.size(), threads, [&] {
         return [&, encoder = ClusterEncoder()](std::size_t k) mutable -> Status {
-            const BuildNode& node = nodes[order[work[k]]];
             EncodedPayload& payload = out[work[k]];
-            FF_ASSIGN_OR_RETURN(
-                    payload.stats,
-                    encoder.encode(
-                            triangles.subspan(node.firstTriangle, node.triangleCount),
-                            grid,
-                            payload.bytes));
+            FF_ASSIGN_OR_RETURN(payload.stats, encoder.encode(runs[work[k]], grid, payload.bytes));
             return Status::ok();
         };
     });
@@ -174,15 +169,32 @@ Result<SubtreeV2Result> writeSubtreeV2(
         // Clustering is most of the encoding's time: done for every node on input.threads
         // threads first, then packed into pages in the nodes' order (deterministic bytes).
         std::vector<EncodedPayload> encoded(tree.order.size());
+        std::vector<EncodedPayload> encodedStandIns(tree.order.size());
+        std::vector<float> standInError(tree.order.size(), 0.0f);
         if (hasGeometry) {
-            std::vector<std::size_t> work; // positions in tree.order with triangles of their own
+            std::vector<std::span<const storage::PackedTriangle>> runs(tree.order.size());
             for (std::size_t i = 0; i < tree.order.size(); ++i) {
                 const BuildNode& node = nodes[tree.order[i]];
-                if (placed.count(tree.order[i]) == 0 && node.triangleCount > 0 && !isInstance(node))
-                    work.push_back(i);
+                if (placed.count(tree.order[i]) == 0 && !isInstance(node))
+                    runs[i] = triangles.subspan(node.firstTriangle, node.triangleCount);
             }
-            FF_RETURN_IF_ERROR(encodePayloads(
-                    nodes, tree.order, work, triangles, *input.grid, input.threads, encoded));
+            FF_RETURN_IF_ERROR(encodePayloads(runs, *input.grid, input.threads, encoded));
+            if (input.standIns) {
+                std::vector<PlacedSource> sources;
+                for (const PlacedNodeV2& p : input.placed)
+                    if (p.standInSource.usable)
+                        sources.push_back({p.node, &p.standInSource});
+                FF_ASSIGN_OR_RETURN(
+                        std::vector<std::optional<StandIn>> standIns,
+                        buildStandIns(nodes, triangles, *input.grid, sources, input.threads, nullptr));
+                for (std::size_t i = 0; i < tree.order.size(); ++i) {
+                    const std::optional<StandIn>& standIn = standIns[tree.order[i]];
+                    runs[i] = standIn ? std::span<const storage::PackedTriangle>(standIn->triangles)
+                                      : std::span<const storage::PackedTriangle>();
+                    standInError[i] = standIn ? standIn->error : 0.0f;
+                }
+                FF_RETURN_IF_ERROR(encodePayloads(runs, *input.grid, input.threads, encodedStandIns));
+            }
         }
         ClusterPagePacker packer(writer, input.prototype);
         std::vector<bool> local; // per rep: a page of this packer, to relocate
@@ -209,6 +221,17 @@ Result<SubtreeV2Result> writeSubtreeV2(
                         payload.bytes, static_cast<std::uint32_t>(payload.stats.clusters), reps));
                 local.resize(reps.size(), true);
                 encoded[i] = EncodedPayload{}; // its memory back as it goes
+            }
+            if (const EncodedPayload& standIn = encodedStandIns[i]; standIn.stats.clusters > 0) {
+                result.standInClusters += standIn.stats;
+                ++result.standIns;
+                FF_RETURN_IF_ERROR(packer.placeStandIn(
+                        standIn.bytes,
+                        static_cast<std::uint32_t>(standIn.stats.clusters),
+                        standInError[i],
+                        reps));
+                local.resize(reps.size(), true);
+                encodedStandIns[i] = EncodedPayload{};
             }
             repCount[n] = static_cast<std::uint32_t>(reps.size()) - firstRep[n];
             if (repCount[n] > 255)

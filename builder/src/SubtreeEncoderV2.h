@@ -5,6 +5,7 @@
 // the nodes in 48-byte records with their representations, addressed by node index.
 
 #include "OctreeBuilder.h"
+#include "StandIns.h"
 
 #include <ff/builder/ClusterBuild.h>
 #include <ff/storage/ClusterCodec.h>
@@ -55,6 +56,8 @@ struct PlacedNodeV2 {
     std::uint64_t storedTriangles = 0;                          ///< its own, as the codec kept them
     double drawnTriangles = 0.0;                                ///< its own and all below it
     double unlitTriangles = 0.0;                                ///< of drawnTriangles
+    /** What its subtree gives a stand-in above it (StandIns.h); unusable if none was built. */
+    StandInSource standInSource{{}, 0.0f, false};
 };
 
 /** kNodeV2Unlit for a Cell whose triangles, its own and all below it, are all unlit (none:
@@ -79,6 +82,8 @@ struct SubtreeV2Input {
     std::span<const PlacedNodeV2> placed;
     /** Threads that cluster the nodes' triangles (the bytes do not depend on it). */
     unsigned threads = 1;
+    /** Give cells simplified stand-ins of their subtrees (StandIns.h; needs a grid). */
+    bool standIns = false;
 };
 
 struct SubtreeV2Result {
@@ -89,7 +94,9 @@ struct SubtreeV2Result {
     std::uint64_t geometryPages = 0;
     std::uint64_t nodePages = 0; ///< pages its records reached (a shared one counted)
     std::uint32_t maxLevel = 0;
-    ClusterBuildStats clusters;
+    ClusterBuildStats clusters; ///< the nodes' own triangles
+    std::uint64_t standIns = 0;
+    ClusterBuildStats standInClusters;
 };
 
 /**

@@ -22,6 +22,7 @@
 #include <filesystem>
 #include <fstream>
 #include <map>
+#include <optional>
 #include <random>
 #include <string>
 #include <vector>
@@ -62,7 +63,7 @@ TriangleKey triangleKey(
 }
 
 /** Calls `visit` with the three decoded corners of every triangle of `node`'s own
- *  representations (prototype `p`). */
+ *  representations (prototype `p`), or of its stand-in's (`standIn`). */
 template <typename Visit>
 void forEachOwnTriangle(
         const storage::SceneFile& file,
@@ -70,11 +71,14 @@ void forEachOwnTriangle(
         std::uint64_t nodePage,
         const storage::NodeV2& node,
         std::size_t p,
-        Visit&& visit) {
+        Visit&& visit,
+        bool standIn = false) {
     const storage::PrototypeV2& prototype = file.prototypesV2()[p];
     std::vector<storage::RepresentationRecord> reps;
     EXPECT_TRUE(storage::readRepresentationsV2(nodePayload, nodePage, node, reps).isOk());
     for (const storage::RepresentationRecord& r : reps) {
+        if (storage::isStandIn(r) != standIn)
+            continue;
         auto geometry = file.pagePayload(r.page, storage::PageType::Geometry);
         EXPECT_TRUE(geometry.isOk());
         Result<storage::ClusterPageIndex> page =
@@ -384,6 +388,87 @@ TEST(SceneV2Test, TheUnlitFlagMarksTheNodesWhoseTrianglesAreAllUnlit) {
         EXPECT_GT(count.unlit, triangles.size() / 3);
         EXPECT_LT(count.unlit, 2 * triangles.size() / 3);
         EXPECT_GT(count.flagged, 10u);
+    }
+}
+
+/** What a node's parent simplified from: its stand-in, or its own triangles and its
+ *  children's sources. */
+struct StandInSourceCount {
+    std::uint64_t triangles = 0;
+    float error = 0.0f;
+    std::uint64_t standIns = 0; ///< at and below the node
+    bool rootHasOne = false;    ///< the node itself has a stand-in
+};
+
+/** Walks node `index`'s subtree checking every stand-in: at most 0.6 x what it simplified, its
+ *  error no less than any stand-in's below it. */
+StandInSourceCount expectStandIns(
+        const storage::SceneFile& file,
+        std::uint32_t index,
+        const storage::NodeBox& parent,
+        std::size_t p) {
+    StandInSourceCount count;
+    storage::NodeV2 node;
+    std::span<const std::byte> payload;
+    std::uint64_t page = 0;
+    if (!readNodeOrFail(file, index, parent, node, payload, page))
+        return count;
+    forEachOwnTriangle(file, payload, page, node, p, [&](const auto&) { ++count.triangles; });
+    for (std::uint32_t c = 0; c < node.childCount; ++c) {
+        const StandInSourceCount below = expectStandIns(file, node.firstChild + c, node.bounds, p);
+        count.triangles += below.triangles;
+        count.error = std::max(count.error, below.error);
+        count.standIns += below.standIns;
+    }
+    std::uint64_t standInTriangles = 0;
+    forEachOwnTriangle(file, payload, page, node, p, [&](const auto&) { ++standInTriangles; }, true);
+    std::vector<storage::RepresentationRecord> reps;
+    EXPECT_TRUE(storage::readRepresentationsV2(payload, page, node, reps).isOk());
+    std::optional<float> error;
+    for (const storage::RepresentationRecord& r : reps)
+        if (storage::isStandIn(r)) {
+            EXPECT_TRUE(!error || *error == r.parameter) << "node " << index << ": one error a stand-in";
+            error = r.parameter;
+        }
+    if (!error) {
+        EXPECT_EQ(standInTriangles, 0u);
+        return count;
+    }
+    EXPECT_LE(static_cast<double>(standInTriangles), 0.6 * static_cast<double>(count.triangles))
+            << "node " << index;
+    EXPECT_GE(*error, count.error) << "node " << index << ": a stand-in above a less accurate one";
+    EXPECT_GT(standInTriangles, 0u);
+    return {standInTriangles, *error, count.standIns + 1, true};
+}
+
+TEST(SceneV2Test, StandInsHalveWhatTheySimplifyAndTheirErrorsGrowUpTheTree) {
+    // Built whole and in chunks laid out level by level (the chunks' roots hand their sources to
+    // the tree above them): both writers give the root a stand-in.
+    const fs::path dir = freshTestDir();
+    const RecordingSink scene = generate("terrain:triangles=200000");
+    BuildOptions whole = v2Options();
+    whole.hierarchy.standIns = true;
+    BuildOptions chunked = whole;
+    chunked.memoryBudgetBytes = SceneBuilder::kMinimumBudgetBytes;
+    chunked.pageSize = storage::kMinPageSize;
+    EXPECT_GT(buildOrFail(scene, dir / "chunked.ffs", chunked).chunks, 4u);
+    const BuildReport report = buildOrFail(scene, dir / "whole.ffs", whole);
+    EXPECT_EQ(report.chunks, 1u);
+    EXPECT_GT(report.standInNodes, 10u);
+    // A quarter a level: all the stand-ins together about a third of the triangles.
+    EXPECT_LT(report.standInTriangles, report.storedTriangles / 2);
+    for (const char* name : {"chunked.ffs", "whole.ffs"}) {
+        SCOPED_TRACE(name);
+        auto file = openOrFail(dir / name);
+        ASSERT_NE(file, nullptr);
+        const storage::PrototypeV2& prototype = file->prototypesV2()[0];
+        const StandInSourceCount count = expectStandIns(*file, prototype.rootNode, prototype.bounds, 0);
+        EXPECT_TRUE(count.rootHasOne);
+        EXPECT_GT(count.standIns, 10u);
+        const Result<storage::HierarchySummary> walked = storage::checkHierarchyV2(*file, file->source());
+        ASSERT_TRUE(walked.isOk()) << walked.status().toString();
+        EXPECT_GT(walked->standIns, 0u);
+        EXPECT_EQ(walked->triangles, prototype.triangleCount); // stand-ins are not stored triangles
     }
 }
 

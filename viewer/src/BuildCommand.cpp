@@ -44,6 +44,7 @@ struct BuildArgs {
     unsigned format = 1;
     std::optional<std::uint64_t> clusterLeafTriangles; ///< unset: HierarchyParams::leafTriangles()
     bool clusterNodes = false;
+    bool standIns = false;
     bool quiet = false;
 };
 
@@ -84,6 +85,7 @@ int runBuild(const BuildArgs& args) {
     options.formatVersion = args.format;
     options.hierarchy.clusterLeafTriangles = args.clusterLeafTriangles;
     options.hierarchy.clusterNodes = args.clusterNodes;
+    options.hierarchy.standIns = args.standIns;
     options.hierarchy.bakeResolution = args.bakeResolution;
     options.hierarchy.bakeInnerDirect = args.bakeInner == "direct";
     options.hierarchy.cubeCost = args.cubeCost;
@@ -224,6 +226,9 @@ CommandRunner addBuildCommand(CLI::App& app) {
                   "--format 2: give each leaf a tree of nodes down to pieces of about a cluster, each with its own bounds "
                   "and cube, so the cut can stop inside a leaf: far views draw far fewer triangles, for 0.6-1 byte a "
                   "triangle more (docs/results, \"Cluster nodes\")");
+    cmd->add_flag("--stand-ins", args->standIns,
+                  "--format 2: give cells a simplified copy of their subtree (meshoptimizer, borders locked), drawn "
+                  "instead of it where its error is below --epsilon pixels (docs/methods.md, \"Stand-ins\")");
     cmd->add_flag("-q,--quiet", args->quiet, "No progress or summary on stderr");
     return [args]() { return runBuild(*args); };
 }

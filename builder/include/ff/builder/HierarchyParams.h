@@ -83,6 +83,9 @@ struct HierarchyParams {
      *  models over issue 16's 8 bytes a triangle, and teleports gain nothing from it. */
     bool clusterNodes = false;
 
+    /** Format 2 only: cells carry simplified stand-ins of their subtrees, drawn where their
+     *  error projects below ε pixels (builder/src/StandIns.h, docs/methods.md §12). */
+    bool standIns = false;
     /** clusterLeafTriangles, or its default for clusterNodes. */
     [[nodiscard]] std::uint64_t leafTriangles() const noexcept {
         return clusterLeafTriangles.value_or(

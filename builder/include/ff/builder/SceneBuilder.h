@@ -86,6 +86,10 @@ struct BuildReport {
     std::uint64_t wideClusters = 0;        ///< v2: of them with 32-bit coordinates
     std::uint64_t clusterVertices = 0;     ///< v2: vertices over all clusters
     std::uint64_t clusterBytes = 0;        ///< v2: encoded clusters (the geometry pages less their slack)
+    bool standIns = false;                 ///< v2: HierarchyParams's
+    std::uint64_t standInNodes = 0;        ///< v2: cells that kept a stand-in
+    std::uint64_t standInTriangles = 0;    ///< v2: their triangles, as the codec kept them
+    std::uint64_t standInBytes = 0;        ///< v2: their encoded clusters (within clusterBytes)
     std::uint32_t maxGridBits = 0;         ///< v2: the largest prototype grid
     std::uint64_t instancedTriangles = 0;  ///< as drawn
     std::uint32_t prototypes = 0;

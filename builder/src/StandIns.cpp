@@ -1,0 +1,193 @@
+#include "StandIns.h"
+
+#include "ParallelFor.h"
+
+#include <ff/storage/Assert.h>
+
+#include <meshoptimizer.h>
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <unordered_map>
+
+namespace ff::builder {
+
+namespace {
+
+/** A corner as the cluster encoder merges it: its grid coordinate and attributes. */
+struct WeldKey {
+    std::array<std::uint32_t, 3> coordinate;
+    std::array<std::int16_t, 2> normalOct;
+    std::array<std::uint8_t, 4> color;
+};
+static_assert(sizeof(WeldKey) == 20); // no padding: meshopt compares its bytes
+
+bool isInstance(const BuildNode& node) {
+    return node.kind == static_cast<std::uint8_t>(storage::NodeKind::Instance);
+}
+
+} // namespace
+
+std::optional<StandIn> simplifySource(
+        std::span<const storage::PackedTriangle> source,
+        float baseError,
+        const storage::PositionGrid& grid) {
+    if (source.size() < kMinStandInSource)
+        return std::nullopt;
+    // Weld the corners on the grid, as the encoder will: the simplifier sees the mesh's real
+    // topology, and its border is the cell's (a corner shared across cells is one vertex here).
+    const std::size_t corners = source.size() * 3;
+    std::vector<WeldKey> keys(corners);
+    for (std::size_t t = 0; t < source.size(); ++t)
+        for (std::size_t c = 0; c < 3; ++c) {
+            const storage::PackedVertex& v = source[t].vertices[c];
+            keys[3 * t + c] = {grid.quantize(v.position), v.normalOct, v.color};
+        }
+    std::vector<unsigned> remap(corners);
+    const std::size_t unique = meshopt_generateVertexRemap(
+            remap.data(), nullptr, corners, keys.data(), corners, sizeof(WeldKey));
+    std::vector<WeldKey> vertices(unique);
+    meshopt_remapVertexBuffer(vertices.data(), keys.data(), corners, sizeof(WeldKey), remap.data());
+    std::vector<float> positions(unique * 3);
+    for (std::size_t v = 0; v < unique; ++v) {
+        const std::array<float, 3> p = grid.position(vertices[v].coordinate);
+        std::copy(p.begin(), p.end(), positions.begin() + static_cast<std::ptrdiff_t>(3 * v));
+    }
+    std::vector<unsigned> indices;
+    indices.reserve(corners);
+    for (std::size_t t = 0; t < source.size(); ++t) {
+        const unsigned a = remap[3 * t];
+        const unsigned b = remap[3 * t + 1];
+        const unsigned c = remap[3 * t + 2];
+        if (a != b && b != c && a != c) // collapsed on the grid: the encoder drops it too
+            indices.insert(indices.end(), {a, b, c});
+    }
+    const std::size_t triangles = indices.size() / 3;
+    if (triangles < kMinStandInSource)
+        return std::nullopt;
+
+    const auto target = static_cast<std::size_t>(static_cast<double>(triangles) * kStandInTargetShare) * 3;
+    std::vector<unsigned> kept(indices.size());
+    float relativeError = 0.0f;
+    // No error limit: the stand-in records what it reached, and the runtime draws it only from
+    // where that error is below ε pixels.
+    const std::size_t keptIndices = meshopt_simplify(
+            kept.data(),
+            indices.data(),
+            indices.size(),
+            positions.data(),
+            unique,
+            3 * sizeof(float),
+            target,
+            1.0f,
+            meshopt_SimplifyLockBorder,
+            &relativeError);
+    if (static_cast<double>(keptIndices / 3) > kMaxStandInShare * static_cast<double>(triangles))
+        return std::nullopt;
+
+    StandIn out;
+    out.error = baseError +
+                relativeError * meshopt_simplifyScale(positions.data(), unique, 3 * sizeof(float));
+    out.triangles.resize(keptIndices / 3);
+    for (std::size_t t = 0; t < out.triangles.size(); ++t)
+        for (std::size_t c = 0; c < 3; ++c) {
+            const unsigned v = kept[3 * t + c];
+            storage::PackedVertex& corner = out.triangles[t].vertices[c];
+            corner.position = {positions[3 * v], positions[3 * v + 1], positions[3 * v + 2]};
+            corner.normalOct = vertices[v].normalOct;
+            corner.color = vertices[v].color;
+        }
+    return out;
+}
+
+Result<std::vector<std::optional<StandIn>>> buildStandIns(
+        const std::vector<BuildNode>& nodes,
+        std::span<const storage::PackedTriangle> triangles,
+        const storage::PositionGrid& grid,
+        std::span<const PlacedSource> placed,
+        unsigned threads,
+        StandInSource* rootSource) {
+    FF_ASSERT(!nodes.empty());
+    std::unordered_map<std::uint32_t, const StandInSource*> placedSources;
+    for (const PlacedSource& p : placed)
+        placedSources[p.node] = p.source;
+
+    // Depths from the root, so each level is simplified after the one below it (in parallel
+    // within a level: its nodes' sources are disjoint).
+    std::vector<std::uint32_t> depth(nodes.size(), 0);
+    std::vector<std::vector<std::uint32_t>> byDepth(1, {0});
+    for (std::size_t d = 0; d < byDepth.size(); ++d) {
+        std::vector<std::uint32_t> next;
+        for (const std::uint32_t n : byDepth[d]) {
+            const BuildNode& node = nodes[n];
+            if (node.placedChildren)
+                continue;
+            for (std::uint32_t c = 0; c < node.childCount; ++c) {
+                depth[node.firstChild + c] = static_cast<std::uint32_t>(d + 1);
+                next.push_back(node.firstChild + c);
+            }
+        }
+        if (!next.empty())
+            byDepth.push_back(std::move(next));
+    }
+
+    std::vector<std::optional<StandIn>> standIns(nodes.size());
+    std::vector<StandInSource> sources(nodes.size());
+    for (std::size_t d = byDepth.size(); d-- > 0;) {
+        const std::vector<std::uint32_t>& level = byDepth[d];
+        FF_RETURN_IF_ERROR(parallelFor(level.size(), threads, [&] {
+            return [&](std::size_t k) -> Status {
+                const std::uint32_t n = level[k];
+                const BuildNode& node = nodes[n];
+                StandInSource& source = sources[n];
+                if (isInstance(node)) {
+                    source.usable = false;
+                    return Status::ok();
+                }
+                if (node.placedChildren || node.placedTriangles) {
+                    const auto p = placedSources.find(n);
+                    if (p == placedSources.end() || p->second == nullptr)
+                        source.usable = false;
+                    else
+                        source = *p->second;
+                    return Status::ok();
+                }
+                std::size_t size = node.triangleCount;
+                for (std::uint32_t c = 0; c < node.childCount; ++c) {
+                    const StandInSource& child = sources[node.firstChild + c];
+                    source.usable = source.usable && child.usable;
+                    size += child.triangles.size();
+                    source.error = std::max(source.error, child.error);
+                }
+                if (!source.usable || size > kMaxStandInSource) {
+                    source = StandInSource{{}, 0.0f, false};
+                    return Status::ok();
+                }
+                source.triangles.reserve(size);
+                const auto own = triangles.subspan(node.firstTriangle, node.triangleCount);
+                source.triangles.insert(source.triangles.end(), own.begin(), own.end());
+                for (std::uint32_t c = 0; c < node.childCount; ++c) {
+                    const StandInSource& child = sources[node.firstChild + c];
+                    source.triangles.insert(
+                            source.triangles.end(), child.triangles.begin(), child.triangles.end());
+                }
+                standIns[n] = simplifySource(source.triangles, source.error, grid);
+                if (standIns[n]) {
+                    source.triangles = standIns[n]->triangles;
+                    source.error = standIns[n]->error;
+                }
+                return Status::ok();
+            };
+        }));
+        // The level below has been simplified into this one: its sources are spent.
+        if (d + 1 < byDepth.size())
+            for (const std::uint32_t n : byDepth[d + 1])
+                sources[n] = StandInSource{};
+    }
+    if (rootSource != nullptr)
+        *rootSource = std::move(sources[0]);
+    return standIns;
+}
+
+} // namespace ff::builder

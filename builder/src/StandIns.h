@@ -1,0 +1,86 @@
+#pragma once
+
+// Simplified stand-ins (issue 17's simplified clusters): a cell may carry a simplified copy of
+// its whole subtree, drawn instead of it where the copy's error projects below ε pixels.
+//
+// Built bottom-up as Nanite builds its cluster groups: a node's source is its own triangles and
+// each child's stand-in (or, where a child kept none, that child's source); the source is
+// simplified with meshoptimizer (meshopt_simplify, its quadric error) with the mesh's border
+// locked, and kept when it halves the triangles enough to pay. A cell's border is where its
+// neighbours' triangles begin, so the edges there are the original ones on both sides, whatever
+// level either side is drawn at: stand-ins never open cracks. Errors add up the tree (a node's
+// is its children's largest plus its own step), so a parent's never undercuts a child's.
+
+#include "OctreeBuilder.h"
+
+#include <ff/storage/ClusterCodec.h>
+#include <ff/storage/SceneFormat.h>
+#include <ff/storage/Status.h>
+
+#include <cstdint>
+#include <optional>
+#include <span>
+#include <vector>
+
+namespace ff::builder {
+
+/** What a node's parent simplifies from: the node's stand-in, or (none kept) its own triangles
+ *  with its children's sources. */
+struct StandInSource {
+    std::vector<storage::PackedTriangle> triangles;
+    /** Hierarchy units: how far `triangles` may lie from the subtree's own surface. */
+    float error = 0.0f;
+    /** False when the subtree is too large to simplify here (kMaxStandInSource) or holds an
+     *  instance: no ancestor gets a stand-in. */
+    bool usable = true;
+};
+
+/** A node's stand-in as written: triangles and the error they promise. */
+struct StandIn {
+    std::vector<storage::PackedTriangle> triangles;
+    float error = 0.0f;
+};
+
+/** Sources no larger than this are simplified (meshopt's memory is ~100 bytes a triangle). */
+inline constexpr std::size_t kMaxStandInSource = 1u << 20;
+/** Smaller sources are drawn as they are: a stand-in of a few dozen triangles saves nothing. */
+inline constexpr std::size_t kMinStandInSource = 256;
+/** A chunk's root hands at most this many triangles up to the tree above the chunks, which
+ *  holds every chunk's at once (else the tree above gets no stand-ins): 1 MiB a chunk. */
+inline constexpr std::size_t kMaxCarriedStandInSource = 1u << 14;
+/** A stand-in must keep at most this share of its source's triangles, or it is not kept
+ *  (issue 17: each level at most 0.6 x its children's). */
+inline constexpr double kMaxStandInShare = 0.6;
+/** The share a simplification aims for: a quarter keeps a surface's stand-ins about as large
+ *  as their children's (four children a level), so a cut's triangles follow the screen. */
+inline constexpr double kStandInTargetShare = 0.25;
+
+/**
+ * Simplifies `source` (welded on `grid`'s coordinates, so as the cluster encoder sees it) to
+ * about kStandInTargetShare of its triangles with its border locked. nullopt when it keeps more
+ * than kMaxStandInShare. The stand-in's error is `baseError` plus the simplification's.
+ */
+[[nodiscard]] std::optional<StandIn> simplifySource(
+        std::span<const storage::PackedTriangle> source,
+        float baseError,
+        const storage::PositionGrid& grid);
+
+/**
+ * Stand-ins of a hierarchy (nodes[0] the root, children after their parents): one entry per
+ * node, set where a stand-in was kept. `placed` gives the sources of nodes whose subtrees were
+ * built elsewhere (a chunk's root, by node index; absent: no source). `rootSource` gets the
+ * root's source for a tree above. Deterministic whatever `threads`.
+ */
+struct PlacedSource {
+    std::uint32_t node = 0;
+    const StandInSource* source = nullptr;
+};
+[[nodiscard]] Result<std::vector<std::optional<StandIn>>> buildStandIns(
+        const std::vector<BuildNode>& nodes,
+        std::span<const storage::PackedTriangle> triangles,
+        const storage::PositionGrid& grid,
+        std::span<const PlacedSource> placed,
+        unsigned threads,
+        StandInSource* rootSource);
+
+} // namespace ff::builder
