@@ -193,16 +193,36 @@ void BackToFrontTraversal::visit(
         return;
     }
 
-    // Refining needs the cell's own triangles and its children's page; without either, the
-    // cell's cube stands in for the whole subtree this frame.
+    // A stand-in accurate enough here is drawn instead of the whole subtree. Else refining
+    // needs the cell's own triangles and its children's page; without either, the cell's cube
+    // stands in for the whole subtree this frame.
+    bool standIn = false;
+    const bool geometryReady =
+            mNodePages->collectPayload(
+                    node,
+                    detail::standInView(
+                            node,
+                            {frame.frustum, frame.localEye, frame.metric},
+                            mFrame->camera,
+                            mPixelScale,
+                            options,
+                            projected),
+                    priority,
+                    mServices->uploads,
+                    mRuns,
+                    standIn) == Fetch::Ready;
     std::span<const std::byte> childPage;
     const bool childrenReady =
-            node.childCount == 0 ||
+            standIn || node.childCount == 0 ||
             mNodePages->childPage(node, priority, childPage) == Fetch::Ready;
-    const bool geometryReady =
-            mNodePages->collectGeometry(node, priority, mServices->uploads, mRuns) == Fetch::Ready;
     if (!childrenReady || !geometryReady) {
         defer(node, ref, active);
+        return;
+    }
+    if (standIn) {
+        ++mStats->standInsDrawn;
+        for (const detail::PayloadRun& run : mRuns)
+            emitGeometry(run, active);
         return;
     }
     for (const detail::PayloadRun& run : mRuns)

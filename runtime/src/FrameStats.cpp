@@ -15,6 +15,7 @@ std::string FrameStats::toJson() const {
             {"occluder_cubes", occluderCubes},
             {"cube_faces_per_level", cubeFacesPerLevel},
             {"triangles_drawn", trianglesDrawn},
+            {"stand_ins_drawn", standInsDrawn},
             {"geometry_draws", geometryDraws},
             {"pages_uploaded", pagesUploaded},
             {"nodes_deferred", nodesDeferred},

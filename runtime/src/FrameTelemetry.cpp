@@ -121,6 +121,9 @@ const std::vector<Column>& columns() {
              [](T t) { return count(t.decodedHeldBytes); }},
             {{"pages_decoded_on_draw", "pages decoded again on the render thread (arena too small)"},
              [](T t) { return count(t.stats.pagesDecodedOnDraw); }},
+            // Added by issue 17.
+            {{"stand_ins", "cells drawn as their simplified stand-in"},
+             [](T t) { return count(t.stats.standInsDrawn); }},
     };
     return table;
 }

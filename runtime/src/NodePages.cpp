@@ -146,7 +146,35 @@ Verdict classify(
         return Verdict::Culled;
     }
     projected = projectedPixels(node, where.localEye, where.metric, camera, pixelScale);
-    return drawnAsCube(node, projected, options) ? Verdict::Cube : Verdict::Refine;
+    if (!drawnAsCube(node, projected, options))
+        return Verdict::Refine;
+    // `--representation simplified`: a cell with payloads of its own is refined instead, and
+    // its stand-in, if it has one, drawn where auto would draw the cube (standInView).
+    const bool mayHaveStandIn = isCell(node) && node.geometryCount > 0;
+    return options.representation == Representation::Simplified && mayHaveStandIn ? Verdict::Refine
+                                                                                   : Verdict::Cube;
+}
+
+StandInView standInView(
+        const storage::NodeRecord& node,
+        const NodeFrame& where,
+        const Camera& camera,
+        float pixelScale,
+        const SelectionOptions& options,
+        float projected) {
+    StandInView view;
+    view.allowed = options.representation != Representation::Cube && options.epsilonPixels > 0.0f;
+    view.forced = options.representation == Representation::Simplified &&
+                  projected < options.epsilonPixels && (node.flags & storage::kNodeHasCube);
+    view.epsilonPixels = options.epsilonPixels;
+    float perUnit = pixelScale * where.metric.maxStretch();
+    if (!camera.orthographic) {
+        const float nearest =
+                where.metric.nearestDistance(toVec3(node.boundsMin), toVec3(node.boundsMax), where.localEye);
+        perUnit = nearest > 0.0f ? perUnit / nearest : INFINITY;
+    }
+    view.pixelsPerUnit = perUnit;
+    return view;
 }
 
 Status nestingTooDeep() {
@@ -327,7 +355,34 @@ Fetch NodePages::collectGeometry(
         IUploadGate& uploads,
         std::vector<PayloadRun>& out) {
     out.clear();
-    Fetch result = payloadRuns(node, priority, out);
+    return admit(payloadRuns(node, priority, out), uploads, out);
+}
+
+Fetch NodePages::collectPayload(
+        const storage::NodeRecord& node,
+        const StandInView& view,
+        float priority,
+        IUploadGate& uploads,
+        std::vector<PayloadRun>& out,
+        bool& standIn) {
+    standIn = false;
+    if (mV2 && view.allowed && isCell(node) && node.geometryCount > 0) {
+        if (readRepresentations(node, priority) != Fetch::Ready) {
+            out.clear();
+            return Fetch::Missing;
+        }
+        const auto found = std::find_if(
+                mRepresentations.begin(), mRepresentations.end(), storage::isStandIn);
+        if (found != mRepresentations.end() && view.accepts(found->parameter)) {
+            standIn = true;
+            out.clear();
+            return admit(clusterRuns(node, priority, out, true), uploads, out);
+        }
+    }
+    return collectGeometry(node, priority, uploads, out);
+}
+
+Fetch NodePages::admit(Fetch result, IUploadGate& uploads, std::vector<PayloadRun>& out) {
     std::size_t kept = 0;
     for (const PayloadRun& run : out) {
         if (!uploads.admit(run.page)) {
@@ -346,7 +401,7 @@ Fetch NodePages::payloadRuns(
     if (node.geometryCount == 0 || !isCell(node))
         return Fetch::Ready;
     if (mV2)
-        return clusterRuns(node, priority, out);
+        return clusterRuns(node, priority, out, false);
     mRuns.clear();
     if (Status status = mScene.geometrySegments(node, mRuns); !status) {
         reportFailure(status);
@@ -364,11 +419,7 @@ Fetch NodePages::payloadRuns(
     return result;
 }
 
-// A format 2 cell's payloads: its representations, in its own page, name runs of whole clusters
-// in cluster pages as the cache keeps them (CachedClusterPage). Kinds this build does not draw are
-// passed over, so a file with a later issue's kinds still draws its clusters.
-Fetch NodePages::clusterRuns(
-        const storage::NodeRecord& node, float priority, std::vector<PayloadRun>& out) {
+Fetch NodePages::readRepresentations(const storage::NodeRecord& node, float priority) {
     std::span<const std::byte> nodePage;
     if (fetch(node.geometryPage, storage::PageType::Nodes, priority, nodePage) != Fetch::Ready)
         return Fetch::Missing;
@@ -382,9 +433,19 @@ Fetch NodePages::clusterRuns(
         reportFailure(status);
         return Fetch::Missing;
     }
+    return Fetch::Ready;
+}
+
+// A format 2 cell's payloads: its representations, in its own page, name runs of whole clusters
+// in cluster pages as the cache keeps them (CachedClusterPage). Kinds this build does not draw are
+// passed over, so a file with a later issue's kinds still draws its clusters.
+Fetch NodePages::clusterRuns(
+        const storage::NodeRecord& node, float priority, std::vector<PayloadRun>& out, bool standIn) {
+    if (readRepresentations(node, priority) != Fetch::Ready)
+        return Fetch::Missing;
     Fetch result = Fetch::Ready;
     for (const storage::RepresentationRecord& r : mRepresentations) {
-        if (r.kind != storage::RepresentationKind::Clusters)
+        if (r.kind != storage::RepresentationKind::Clusters || storage::isStandIn(r) != standIn)
             continue;
         std::span<const std::byte> payload;
         if (fetch(r.page, storage::PageType::Geometry, priority, payload) != Fetch::Ready) {

@@ -65,6 +65,23 @@ std::uint32_t cubeFacesToward(
         const glm::vec3& localEye,
         std::uint8_t leastAlpha);
 
+/**
+ * Whether a cell the ε rule refines may be drawn as its stand-in (a simplified copy of its
+ * subtree, builder/src/StandIns.h) instead: when the stand-in's error, in the cell's units, is
+ * less than ε pixels at the cell's nearest point (times the instance's largest stretch), or
+ * always where `--representation simplified` forces it over the cube.
+ */
+struct StandInView {
+    bool allowed = false;      ///< `--representation cube` draws none
+    bool forced = false;       ///< simplified, where auto would draw the cube
+    float pixelsPerUnit = 0.0f; ///< at the cell's nearest point; infinite with the eye inside
+    float epsilonPixels = 0.0f;
+
+    [[nodiscard]] bool accepts(float error) const noexcept {
+        return allowed && (forced || error * pixelsPerUnit < epsilonPixels);
+    }
+};
+
 /** Whether a frame draws its cubes as area-weighted points (`--cube-draw`), in every pass. */
 bool drawsCubesAsPoints(const SelectionOptions& options);
 
@@ -89,6 +106,16 @@ Verdict classify(
         const SelectionOptions& options,
         FrameStats& stats,
         float& projected);
+
+/** The stand-in rule for a node classify() refined, seen from `where` (`projected` its ε
+ *  measure). */
+StandInView standInView(
+        const storage::NodeRecord& node,
+        const NodeFrame& where,
+        const Camera& camera,
+        float pixelScale,
+        const SelectionOptions& options,
+        float projected);
 
 /** The failure a hierarchy nesting deeper than kMaxNesting reports. */
 Status nestingTooDeep();
@@ -158,6 +185,16 @@ public:
             float priority,
             IUploadGate& uploads,
             std::vector<PayloadRun>& out);
+    /** What a refined cell draws: its stand-in's runs if it has one `view` accepts
+     *  (`standIn` set: draw them instead of its own payload and children), else
+     *  collectGeometry()'s. Every page is asked for and admitted as in collectGeometry(). */
+    Fetch collectPayload(
+            const storage::NodeRecord& node,
+            const StandInView& view,
+            float priority,
+            IUploadGate& uploads,
+            std::vector<PayloadRun>& out,
+            bool& standIn);
     /** collectGeometry() without an upload gate, appending to `out`. */
     Fetch payloadRuns(const storage::NodeRecord& node, float priority, std::vector<PayloadRun>& out);
 
@@ -180,7 +217,13 @@ private:
             storage::NodeRef ref,
             const storage::NodeBox& parent,
             std::uint8_t level) const;
-    Fetch clusterRuns(const storage::NodeRecord& node, float priority, std::vector<PayloadRun>& out);
+    /** A format 2 cell's representations into mRepresentations (its own page fetched). */
+    Fetch readRepresentations(const storage::NodeRecord& node, float priority);
+    /** The runs of its own clusters, or of its stand-in's (`standIn`). */
+    Fetch clusterRuns(
+            const storage::NodeRecord& node, float priority, std::vector<PayloadRun>& out, bool standIn);
+    /** Drops the runs `uploads` refuses (counted; Missing then). */
+    Fetch admit(Fetch result, IUploadGate& uploads, std::vector<PayloadRun>& out);
 
     const storage::SceneIndex& mScene;
     IPageAccess& mPages;

@@ -172,6 +172,8 @@ struct OcclusionTraversal::Impl {
     void draw(const Tested& node, bool answered = false);
     void refine(const Entry& entry, std::uint32_t slot, float projected, bool answered);
     enum class Expanded { Deferred, NothingOwn, DrewGeometry };
+    /** Queues `runs` (a cell's payload) for drawing under `transform`. */
+    void drawRuns(std::uint32_t transform);
     /** Expands a visible cell: draws its own geometry and hands each child to `child`. Deferred
      *  (nothing done) when its pages are not all resident or a child is unreadable: its cube
      *  stands in for it (pass 2). */
@@ -872,17 +874,49 @@ bool OcclusionTraversal::Impl::enterInstance(
     return true;
 }
 
+void OcclusionTraversal::Impl::drawRuns(std::uint32_t transform) {
+    const std::uint32_t index = listIndex(transform);
+    for (const detail::PayloadRun& run : runs) {
+        stats->trianglesDrawn += run.triangles;
+        list.geometry.push_back(
+                {run.page, run.payload, run.first, run.count, index, run.triangles, run.payloadBytes});
+    }
+    if (list.bytes() >= frame->budgets.drawBatchBytes)
+        flush();
+}
+
 template <typename Child>
 OcclusionTraversal::Impl::Expanded OcclusionTraversal::Impl::expandCell(
         const storage::NodeRecord& node, std::uint32_t transform, float priority, Child&& child) {
-    std::span<const std::byte> childPage;
-    const bool childrenReady =
-            node.childCount == 0 || nodePages.childPage(node, priority, childPage) == Fetch::Ready;
+    // A stand-in accurate enough here is drawn instead of the whole subtree (as back to front).
+    const Transform& t = transforms[transform];
+    const float projected = detail::projectedPixels(node, t.localEye, t.metric, frame->camera, pixelScale);
+    bool standIn = false;
     const bool geometryReady =
-            nodePages.collectGeometry(node, priority, services->uploads, runs) == Fetch::Ready;
+            nodePages.collectPayload(
+                    node,
+                    detail::standInView(
+                            node,
+                            {t.frustum, t.localEye, t.metric},
+                            frame->camera,
+                            pixelScale,
+                            frame->selection,
+                            projected),
+                    priority,
+                    services->uploads,
+                    runs,
+                    standIn) == Fetch::Ready;
+    std::span<const std::byte> childPage;
+    const bool childrenReady = standIn || node.childCount == 0 ||
+                               nodePages.childPage(node, priority, childPage) == Fetch::Ready;
     if (!childrenReady || !geometryReady) {
         sawCube(node, transform); // its cube stands in for the subtree (pass 2)
         return Expanded::Deferred;
+    }
+    if (standIn) {
+        ++stats->standInsDrawn;
+        drawRuns(transform);
+        return Expanded::DrewGeometry;
     }
     // Decode every child before drawing anything, so a bad child leaves the whole cell to its
     // cube, as in the back-to-front walk.
@@ -899,22 +933,8 @@ OcclusionTraversal::Impl::Expanded OcclusionTraversal::Impl::expandCell(
         children.push_back({*record, childRef});
     }
     const bool drew = !runs.empty();
-    if (drew) {
-        const std::uint32_t index = listIndex(transform);
-        for (const detail::PayloadRun& run : runs) {
-            stats->trianglesDrawn += run.triangles;
-            list.geometry.push_back(
-                    {run.page,
-                     run.payload,
-                     run.first,
-                     run.count,
-                     index,
-                     run.triangles,
-                     run.payloadBytes});
-        }
-        if (list.bytes() >= frame->budgets.drawBatchBytes)
-            flush();
-    }
+    if (drew)
+        drawRuns(transform);
     for (std::size_t i = base; i < base + node.childCount; ++i) {
         const ChildRecord next = children[i]; // the vector may grow below
         child(next.record, next.ref);

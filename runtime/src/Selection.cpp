@@ -19,6 +19,11 @@ constexpr std::array<std::pair<CubeStyle, const char*>, 3> kCubeStyles = {{
         {CubeStyle::Faces, "faces"},
         {CubeStyle::AreaWeightedPoints, "points"},
 }};
+constexpr std::array<std::pair<Representation, const char*>, 3> kRepresentations = {{
+        {Representation::Auto, "auto"},
+        {Representation::Cube, "cube"},
+        {Representation::Simplified, "simplified"},
+}};
 constexpr std::array<std::pair<OcclusionBackend, const char*>, 2> kOcclusionBackends = {{
         {OcclusionBackend::Queries, "queries"},
         {OcclusionBackend::Hzb, "hzb"},
@@ -56,6 +61,12 @@ const char* cubeStyleName(CubeStyle style) noexcept {
 }
 std::optional<CubeStyle> parseCubeStyle(std::string_view name) noexcept {
     return parseIn(kCubeStyles, name);
+}
+const char* representationName(Representation representation) noexcept {
+    return nameIn(kRepresentations, representation);
+}
+std::optional<Representation> parseRepresentation(std::string_view name) noexcept {
+    return parseIn(kRepresentations, name);
 }
 const char* occlusionBackendName(OcclusionBackend backend) noexcept {
     return nameIn(kOcclusionBackends, backend);

@@ -20,13 +20,19 @@ TransformMetric::TransformMetric(const glm::mat4& localToWorld) noexcept
     : mLinear(localToWorld)
     , mGram(glm::transpose(mLinear) * mLinear)
     , mAbsDeterminant(std::fabs(glm::determinant(mLinear)))
-    , mOrthogonalColumns(true) {
+    , mOrthogonalColumns(true)
+    , mMaxStretch(0.0f) {
     for (int i = 0; i < 3; ++i) {
         for (int j = i + 1; j < 3; ++j) {
             if (std::fabs(mGram[i][j]) > kOrthogonalCosine * std::sqrt(mGram[i][i] * mGram[j][j]))
                 mOrthogonalColumns = false;
         }
     }
+    // Orthogonal columns: the singular values are the column lengths. Otherwise the Frobenius
+    // norm, never below the largest singular value.
+    mMaxStretch = mOrthogonalColumns
+                          ? std::sqrt(std::max({mGram[0][0], mGram[1][1], mGram[2][2]}))
+                          : std::sqrt(mGram[0][0] + mGram[1][1] + mGram[2][2]);
 }
 
 float TransformMetric::projectedArea(

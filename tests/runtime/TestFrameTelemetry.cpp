@@ -64,7 +64,9 @@ const std::vector<std::string> kPinnedColumns = {
         "pages_decoded",
         "decode_ms",
         "decoded_held_bytes",
-        "pages_decoded_on_draw"};
+        "pages_decoded_on_draw",
+        // Added by issue 17.
+        "stand_ins"};
 
 TEST(FrameTelemetryTest, ColumnsAreThePinnedOnesInOrder) {
     EXPECT_EQ(telemetryColumnNames(), kPinnedColumns);

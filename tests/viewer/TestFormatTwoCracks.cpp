@@ -2,7 +2,7 @@
 // to the same float in both and neighbouring clusters meet exactly (FORMAT.md §6.3). A crack
 // would show as background through a surface: a pixel format 1 covers, format 2 does not, whose
 // four neighbours format 2 covers (a silhouette that moved by a fraction of a pixel has
-// uncovered neighbours, a hole inside the surface has none).
+// uncovered neighbours, a hole inside the surface has none). The same holds for stand-ins.
 
 #include "FarfieldProcess.h"
 
@@ -93,6 +93,56 @@ TEST_P(FormatTwoCrackTest, NoBackgroundShowsBetweenClusters) {
         }
     }
     EXPECT_GT(surface, 100000u) << "the views show little of the surface";
+}
+
+// Stand-ins (builder/src/StandIns.h) keep their cell's border edges, so neighbours drawn at
+// different levels, or one as a stand-in and one as its triangles, still meet exactly. Forced
+// over the cubes at a coarse ε, a frame mixes stand-ins of several levels with triangles.
+TEST_P(FormatTwoCrackTest, StandInsOfMixedLevelsLeaveNoBackground) {
+    const fs::path dir = freshTestDir();
+    const fs::path scene = dir / "scene.ffs";
+    const ProcessResult built = runFarfield(
+            {"build", "-q", "--generate", GetParam(), "--format", "2", "--stand-ins", "-o", scene.string()},
+            dir);
+    ASSERT_TRUE(built.exited && built.exitCode == 0) << built.describe();
+    const std::vector<std::vector<std::string>> views = {
+            {},
+            {"--azimuth", "130", "--elevation", "-25", "--distance", "1.6"},
+            {"--elevation", "85", "--distance", "0.9"},
+            {"--elevation", "30", "--distance", "0.5"}, // inside the sphere: the far side far
+    };
+    int mixed = 0; // frames of several stand-ins (a smooth sphere far off is one stand-in)
+    for (std::size_t v = 0; v < views.size(); ++v) {
+        std::vector<std::string> common = {"--size", "480x360", "--coverage-alpha"};
+        common.insert(common.end(), views[v].begin(), views[v].end());
+        std::vector<std::string> full = common;
+        full.insert(full.end(), {"--method", "full"});
+        const runtime::Image reference =
+                renderToImage(scene, dir / ("full" + std::to_string(v) + ".png"), full, dir);
+        std::vector<std::string> exact = common;
+        exact.insert(exact.end(), {"--epsilon", "0", "--representation", "simplified"});
+        EXPECT_EQ(
+                differingPixels(
+                        renderToImage(scene, dir / ("exact" + std::to_string(v) + ".png"), exact, dir),
+                        reference),
+                0u)
+                << "view " << v << ": ε = 0 draws a stand-in";
+        for (const char* epsilon : {"1", "8", "32"}) {
+            const fs::path stats = dir / "stats.json";
+            std::vector<std::string> args = common;
+            args.insert(
+                    args.end(),
+                    {"--epsilon", epsilon, "--representation", "simplified", "--stats", stats.string()});
+            const runtime::Image image = renderToImage(
+                    scene, dir / ("view" + std::to_string(v) + "_" + epsilon + ".png"), args, dir);
+            const nlohmann::json frame = readJsonFile(stats)["frames"].back();
+            const auto standIns = frame["stand_ins_drawn"].get<std::uint64_t>();
+            EXPECT_GT(standIns, 0u) << "view " << v << " ε " << epsilon;
+            mixed += standIns > 1 ? 1 : 0;
+            EXPECT_EQ(crackPixels(image, reference), 0u) << "view " << v << " ε " << epsilon;
+        }
+    }
+    EXPECT_GT(mixed, 0);
 }
 
 INSTANTIATE_TEST_SUITE_P(

@@ -30,6 +30,21 @@ CLI::Option* addCubeDrawOption(CLI::App& cmd, std::string& cubeDraw) {
             ->capture_default_str();
 }
 
+CLI::Option* addRepresentationOption(CLI::App& cmd, runtime::Representation& representation) {
+    return cmd
+            .add_option_function<std::string>(
+                    "--representation",
+                    [&representation](const std::string& name) {
+                        representation = runtime::parseRepresentation(name).value_or(runtime::Representation::Auto);
+                    },
+                    "What a cell may be drawn as instead of its subtree: auto (its cube below epsilon pixels, "
+                    "else its stand-in where its error is below epsilon pixels; format 2 built with "
+                    "--stand-ins), cube (never a stand-in) or simplified (the stand-in also where auto draws "
+                    "the cube)")
+            ->check(CLI::IsMember({"auto", "cube", "simplified"}))
+            ->default_str(runtime::representationName(representation));
+}
+
 CLI::Option* addCubeAnisotropyOption(CLI::App& cmd, float& anisotropy) {
     return cmd
             .add_option(

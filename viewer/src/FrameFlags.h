@@ -17,6 +17,8 @@ extern const char* const kEpsilonHelp;
 CLI::Option* addEpsilonOption(CLI::App& cmd, float& epsilon);
 CLI::Option* addMethodOption(CLI::App& cmd, std::string& method);
 CLI::Option* addCubeDrawOption(CLI::App& cmd, std::string& cubeDraw);
+/** `--representation auto|cube|simplified` (runtime::Representation). */
+CLI::Option* addRepresentationOption(CLI::App& cmd, runtime::Representation& representation);
 CLI::Option* addCubeAnisotropyOption(CLI::App& cmd, float& anisotropy);
 CLI::Option* addGpuBudgetOption(CLI::App& cmd, std::string& gpuBudget);
 CLI::Option* addGpuUploadsOption(CLI::App& cmd, std::uint32_t& uploads);

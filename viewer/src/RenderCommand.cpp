@@ -24,6 +24,7 @@ struct RenderArgs {
     std::string output;
     std::string size = "640x480";
     float epsilon = 1.0f;
+    runtime::Representation representation = runtime::Representation::Auto;
     std::string method = "hierarchical";
     std::string cubeDraw = "auto";
     float cubeAnisotropy = 1.0f;
@@ -84,6 +85,7 @@ int runRender(const RenderArgs& args) {
     frameContext.supersample = args.supersample;
     frameContext.selection.method = *method;
     frameContext.selection.epsilonPixels = args.epsilon;
+    frameContext.selection.representation = args.representation;
     frameContext.selection.cubeStyle =
             runtime::parseCubeStyle(args.cubeDraw).value_or(runtime::CubeStyle::Auto); // checked by CLI11
     frameContext.selection.maxCubeAnisotropy = args.cubeAnisotropy;
@@ -134,6 +136,7 @@ CommandRunner addRenderCommand(CLI::App& app) {
     cmd->add_option("-o,--output", args->output, "Image to write (.png, .exr, .tif, ...)");
     cmd->add_option("--size", args->size, "Image size WIDTHxHEIGHT")->capture_default_str();
     addEpsilonOption(*cmd, args->epsilon);
+    addRepresentationOption(*cmd, args->representation);
     addMethodOption(*cmd, args->method);
     addCubeDrawOption(*cmd, args->cubeDraw);
     addCubeAnisotropyOption(*cmd, args->cubeAnisotropy);

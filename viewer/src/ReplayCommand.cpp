@@ -41,6 +41,7 @@ struct ReplayArgs {
     bool sync = false;
     std::string size = "640x480";
     float epsilon = 1.0f;
+    runtime::Representation representation = runtime::Representation::Auto;
     float cubeAnisotropy = 1.0f;
     unsigned ioThreads = 2;
     std::size_t uploadsPerFrame = 64;
@@ -120,6 +121,7 @@ int runReplay(const ReplayArgs& args) {
     frameContext.width = size->x;
     frameContext.height = size->y;
     frameContext.selection.epsilonPixels = args.epsilon;
+    frameContext.selection.representation = args.representation;
     frameContext.selection.maxCubeAnisotropy = args.cubeAnisotropy;
     frameContext.occlusion = args.occlusion;
     frameContext.budgets.pageInstallsPerFrame = args.uploadsPerFrame;
@@ -310,6 +312,7 @@ CommandRunner addReplayCommand(CLI::App& app) {
     cmd->add_flag("--sync", args->sync, "Wait for every page a frame wants (deterministic reference; counts stalls)");
     cmd->add_option("--size", args->size, "Image size WIDTHxHEIGHT")->capture_default_str();
     addEpsilonOption(*cmd, args->epsilon);
+    addRepresentationOption(*cmd, args->representation);
     addCubeAnisotropyOption(*cmd, args->cubeAnisotropy);
     addOcclusionOptions(*cmd, args->occlusion);
     cmd->add_option("--io-threads", args->ioThreads, "Background read threads")->capture_default_str();

@@ -32,6 +32,7 @@ struct ViewArgs {
     std::string scene;
     std::string size = "1280x720";
     float epsilon = 1.0f;
+    runtime::Representation representation = runtime::Representation::Auto;
     std::string method = "hierarchical";
     std::string gpuBudget = "512MiB";
     std::uint64_t cacheMb = 0;
@@ -266,6 +267,7 @@ int runView(const ViewArgs& args) {
         frameContext.timeSeconds = std::chrono::duration<double>(now - start).count();
         frameContext.selection.method = controls.method;
         frameContext.selection.epsilonPixels = controls.epsilonPixels;
+        frameContext.selection.representation = args.representation;
         frameContext.occlusion = args.occlusion;
         frameContext.budgets.pageInstallsPerFrame = args.uploadsPerFrame;
         frameContext.budgets.gpuUploadsPerFrame = args.gpuUploadsPerFrame;
@@ -356,6 +358,7 @@ CommandRunner addViewCommand(CLI::App& app) {
     cmd->add_option("scene", args->scene, "Scene file (.ffs)")->required();
     cmd->add_option("--size", args->size, "Window size WIDTHxHEIGHT")->capture_default_str();
     addEpsilonOption(*cmd, args->epsilon);
+    addRepresentationOption(*cmd, args->representation);
     addMethodOption(*cmd, args->method);
     cmd->add_option("--cache-mb", args->cacheMb, "Stream pages through a page cache of this many MiB (0: map everything)")
             ->capture_default_str();

@@ -19,6 +19,9 @@ struct FrameStats {
     /** Front-facing cube faces drawn per level of their own hierarchy (index = level). */
     std::vector<std::uint64_t> cubeFacesPerLevel;
     std::uint64_t trianglesDrawn = 0;
+    /** Cells drawn as their stand-in (a simplified copy of their subtree; its triangles are
+     *  among trianglesDrawn). */
+    std::uint64_t standInsDrawn = 0;
     std::uint64_t geometryDraws = 0; ///< draw commands for geometry (merged page runs)
     std::uint64_t pagesUploaded = 0; ///< geometry pages sent to the GPU this frame
     /** Cells drawn coarser than the ε rule wanted because pages were not resident ("debt"). */

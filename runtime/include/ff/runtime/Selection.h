@@ -26,11 +26,24 @@ enum class CubeStyle {
     Auto,   ///< points when ε <= 2 pixels (every drawn cube then covers at most 4 pixels), else faces
 };
 
+/** What a cell that the ε rule would refine may be drawn as instead (`--representation`). */
+enum class Representation {
+    /** Its cube where the cell is below ε pixels, else its stand-in (a simplified copy of the
+     *  subtree, format 2 files built with --stand-ins) where the stand-in's error is below ε
+     *  pixels, else its own payload and children. */
+    Auto,
+    Cube,       ///< never a stand-in (the hierarchy as before stand-ins)
+    Simplified, ///< a stand-in wherever auto would draw the cube or the stand-in
+};
+
 /** The names users type and read (`--method`, `--cube-draw`, bench scenarios, the HUD): one
  *  table each, in Selection.cpp. */
 const char* methodName(Method method) noexcept;
 /** "hierarchical" or "full"; nullopt for anything else. */
 std::optional<Method> parseMethod(std::string_view name) noexcept;
+const char* representationName(Representation representation) noexcept;
+/** "auto", "cube" or "simplified"; nullopt for anything else. */
+std::optional<Representation> parseRepresentation(std::string_view name) noexcept;
 const char* cubeStyleName(CubeStyle style) noexcept;
 /** "faces", "points" or "auto"; nullopt for anything else. */
 std::optional<CubeStyle> parseCubeStyle(std::string_view name) noexcept;
@@ -57,6 +70,7 @@ struct SelectionOptions {
      *  everywhere. */
     float epsilonPixels = 1.0f;
     CubeStyle cubeStyle = CubeStyle::Auto;
+    Representation representation = Representation::Auto;
     /** A cube whose coverage (alpha) along the three axes differs by more than this is refused
      *  where the cell can be refined: such a cell (slabs of a venetian blind, a sheet seen
      *  edge-on) looks opaque from one side and transparent from another, and interpolating its

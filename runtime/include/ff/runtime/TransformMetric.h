@@ -43,6 +43,11 @@ public:
             const glm::vec3& boxMax,
             const glm::vec3& localEye) const noexcept;
 
+    /** The most a local length can grow in world units (the linear part's largest singular
+     *  value; with shear, the Frobenius norm, which bounds it): a stand-in's error in world
+     *  units is at most its local error times this, whatever the instance's per-axis scale. */
+    [[nodiscard]] float maxStretch() const noexcept { return mMaxStretch; }
+
     /** Squared world length of the local vector v (orders children by world distance). */
     [[nodiscard]] float worldLengthSquared(const glm::vec3& v) const noexcept {
         const glm::vec3 world = mLinear * v;
@@ -54,6 +59,7 @@ private:
     glm::mat3 mGram;         ///< Mᵀ M: |M v|² = vᵀ (Mᵀ M) v
     float mAbsDeterminant;   ///< |det M|: local volume to world volume
     bool mOrthogonalColumns; ///< Mᵀ M is diagonal: no shear, clamping is exact
+    float mMaxStretch;       ///< maxStretch()
 };
 
 } // namespace ff::runtime
