@@ -161,7 +161,7 @@ SweepSpec readSweep(ScenarioReader& reader, const std::vector<MethodSpec>& metho
     if (!sweepable) {
         s.fail("parameter",
                "\"" + sweep.parameter +
-                       "\" is neither a method key a sweep can vary (eps, cube_draw, cube_anisotropy) nor " +
+                       "\" is neither a method key a sweep can vary (eps, cube_draw, cube_anisotropy, representation, ...) nor " +
                        kBuildPrefix + "--FLAG");
         return sweep;
     }
@@ -239,7 +239,9 @@ Status runViews(const ViewsParams& p, const Scenario& scenario, const BenchOptio
              "over_coverage_fraction",
              "reference_covered_pixels",
              "scene_triangles",
-             "scene_file_bytes"});
+             "scene_file_bytes",
+             "representation",
+             "stand_ins"});
     // A build sweep rebuilds the scene per value; otherwise one build and no value here.
     const std::vector<std::optional<nlohmann::json>> builds = [&] {
         std::vector<std::optional<nlohmann::json>> list;
@@ -329,7 +331,9 @@ Status runViews(const ViewsParams& p, const Scenario& scenario, const BenchOptio
                              formatNumber(fraction(coverage.overCoverage, covered), 5),
                              std::to_string(covered),
                              sceneTriangles,
-                             sceneBytes});
+                             sceneBytes,
+                             runtime::representationName(m.selection.representation),
+                             std::to_string(frame.stats.standInsDrawn)});
                 }
             }
         }

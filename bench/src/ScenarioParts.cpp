@@ -152,6 +152,15 @@ Status setMethodKey(MethodSpec& method, const std::string& key, const nlohmann::
         method.selection.maxCubeAnisotropy = value.get<float>();
         return Status::ok();
     }
+    if (key == "representation") {
+        const std::optional<runtime::Representation> representation =
+                value.is_string() ? runtime::parseRepresentation(value.get<std::string>()) : std::nullopt;
+        if (!representation)
+            return Status(ErrorCode::InvalidArgument,
+                          "representation: expected \"auto\", \"cube\" or \"simplified\", got " + value.dump());
+        method.selection.representation = *representation;
+        return Status::ok();
+    }
     if (key == "occlusion" || key == "coherence" || key == "oracle" || key == "cube_occluders") {
         if (!value.is_boolean())
             return Status(ErrorCode::InvalidArgument, key + ": expected true or false, got " + value.dump());
@@ -183,7 +192,7 @@ Status setMethodKey(MethodSpec& method, const std::string& key, const nlohmann::
     return Status(
             ErrorCode::InvalidArgument,
             "\"" + key +
-                    "\" is not a method key a sweep can vary (eps, cube_draw, cube_anisotropy, occlusion, "
+                    "\" is not a method key a sweep can vary (eps, cube_draw, cube_anisotropy, representation, occlusion, "
                     "coherence, oracle, occlusion_backend, cube_occluders, opacity_threshold)");
 }
 

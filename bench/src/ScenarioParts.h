@@ -83,7 +83,7 @@ struct MethodSpec {
 
 /** Method keys a sweep may vary (the others, label and method, name what is swept). */
 inline constexpr const char* kSweepableMethodKeys[] = {
-        "eps", "cube_draw", "cube_anisotropy", "occlusion", "coherence", "oracle", "occlusion_backend",
+        "eps", "cube_draw", "cube_anisotropy", "representation", "occlusion", "coherence", "oracle", "occlusion_backend",
         "cube_occluders", "opacity_threshold"};
 
 /** Reads "methods" (a non-empty array; labels unique); errors go to the reader. */
