@@ -1,6 +1,7 @@
 #include "StandIns.h"
 
 #include "ParallelFor.h"
+#include "StandInError.h"
 
 #include <ff/storage/Assert.h>
 
@@ -47,13 +48,11 @@ std::optional<StandIn> simplifySource(
     std::vector<unsigned> remap(corners);
     const std::size_t unique = meshopt_generateVertexRemap(
             remap.data(), nullptr, corners, keys.data(), corners, sizeof(WeldKey));
-    std::vector<WeldKey> vertices(unique);
-    meshopt_remapVertexBuffer(vertices.data(), keys.data(), corners, sizeof(WeldKey), remap.data());
-    std::vector<float> positions(unique * 3);
-    for (std::size_t v = 0; v < unique; ++v) {
-        const std::array<float, 3> p = grid.position(vertices[v].coordinate);
-        std::copy(p.begin(), p.end(), positions.begin() + static_cast<std::ptrdiff_t>(3 * v));
-    }
+    std::vector<WeldKey> welded(unique);
+    meshopt_remapVertexBuffer(welded.data(), keys.data(), corners, sizeof(WeldKey), remap.data());
+    std::vector<storage::PackedVertex> vertices(unique); // on the grid, as the encoder keeps them
+    for (std::size_t v = 0; v < unique; ++v)
+        vertices[v] = {grid.position(welded[v].coordinate), welded[v].normalOct, welded[v].color};
     std::vector<unsigned> indices;
     indices.reserve(corners);
     for (std::size_t t = 0; t < source.size(); ++t) {
@@ -76,9 +75,9 @@ std::optional<StandIn> simplifySource(
             kept.data(),
             indices.data(),
             indices.size(),
-            positions.data(),
+            vertices[0].position.data(),
             unique,
-            3 * sizeof(float),
+            sizeof(storage::PackedVertex),
             target,
             1.0f,
             meshopt_SimplifyLockBorder,
@@ -86,18 +85,14 @@ std::optional<StandIn> simplifySource(
     if (static_cast<double>(keptIndices / 3) > kMaxStandInShare * static_cast<double>(triangles))
         return std::nullopt;
 
+    kept.resize(keptIndices);
+    const float scale = meshopt_simplifyScale(vertices[0].position.data(), unique, sizeof(storage::PackedVertex));
     StandIn out;
-    out.error = baseError +
-                relativeError * meshopt_simplifyScale(positions.data(), unique, 3 * sizeof(float));
+    out.error = baseError + std::max(relativeError * scale, shadingError(vertices, indices, kept));
     out.triangles.resize(keptIndices / 3);
     for (std::size_t t = 0; t < out.triangles.size(); ++t)
-        for (std::size_t c = 0; c < 3; ++c) {
-            const unsigned v = kept[3 * t + c];
-            storage::PackedVertex& corner = out.triangles[t].vertices[c];
-            corner.position = {positions[3 * v], positions[3 * v + 1], positions[3 * v + 2]};
-            corner.normalOct = vertices[v].normalOct;
-            corner.color = vertices[v].color;
-        }
+        for (std::size_t c = 0; c < 3; ++c)
+            out.triangles[t].vertices[c] = vertices[kept[3 * t + c]];
     return out;
 }
 

@@ -272,6 +272,12 @@ TEST(SceneV2Test, SameInputGivesTheSameBytesWhateverTheThreads) {
     buildOrFail(scene, dir / "a.ffs", one);
     buildOrFail(scene, dir / "b.ffs", two);
     EXPECT_EQ(fileBytes(dir / "a.ffs"), fileBytes(dir / "b.ffs"));
+    // Stand-ins are simplified level by level on the threads (one prototype built whole).
+    one.hierarchy.standIns = two.hierarchy.standIns = true;
+    const RecordingSink terrain = generate("terrain:triangles=200000");
+    EXPECT_GT(buildOrFail(terrain, dir / "c.ffs", one).standInNodes, 0u);
+    buildOrFail(terrain, dir / "d.ffs", two);
+    EXPECT_EQ(fileBytes(dir / "c.ffs"), fileBytes(dir / "d.ffs"));
 }
 
 TEST(SceneV2Test, AChunkedPrototypeDecodesToItsInputLikeOneBuiltWhole) {

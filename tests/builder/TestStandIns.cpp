@@ -1,0 +1,103 @@
+// Stand-ins (builder/src/StandIns.h, StandInError.h): a simplified copy of a source keeps its
+// border, halves it at least, and its error covers both where its surface moved and where its
+// shading did.
+
+#include "StandIns.h"
+#include "StandInError.h"
+
+#include <ff/storage/ClusterCodec.h>
+#include <ff/storage/VertexCodec.h>
+
+#include <gtest/gtest.h>
+
+#include <array>
+#include <cmath>
+#include <set>
+#include <vector>
+
+namespace ff::builder {
+namespace {
+
+constexpr int kCells = 48; // a 48 x 48 grid of unit squares: 4,608 triangles
+
+storage::PackedVertex vertexAt(int x, int z, float height, std::array<std::uint8_t, 4> color) {
+    storage::PackedVertex v;
+    v.position = {static_cast<float>(x), height, static_cast<float>(z)};
+    v.normalOct = storage::encodeOctNormal(0.0f, 1.0f, 0.0f);
+    v.color = color;
+    return v;
+}
+
+/** A flat square sheet; `colorAt(x, z)` colours its vertices. */
+template <typename Color>
+std::vector<storage::PackedTriangle> sheet(Color colorAt) {
+    std::vector<storage::PackedTriangle> out;
+    for (int z = 0; z < kCells; ++z)
+        for (int x = 0; x < kCells; ++x) {
+            const auto v = [&](int dx, int dz) { return vertexAt(x + dx, z + dz, 0.0f, colorAt(x + dx, z + dz)); };
+            out.push_back({{v(0, 0), v(0, 1), v(1, 1)}});
+            out.push_back({{v(0, 0), v(1, 1), v(1, 0)}});
+        }
+    return out;
+}
+
+storage::PositionGrid gridFor() {
+    return storage::PositionGrid::covering({0, -1, 0}, {kCells, 1, kCells}, 16).value();
+}
+
+std::set<std::array<std::uint32_t, 3>> borderCorners(
+        const std::vector<storage::PackedTriangle>& triangles, const storage::PositionGrid& grid) {
+    // On the grid: a stand-in's corners are the grid's positions of the source's.
+    const std::uint32_t lo = grid.quantize({0, 0, 0})[0];
+    const std::uint32_t hi = grid.quantize({kCells, 0, kCells})[0];
+    std::set<std::array<std::uint32_t, 3>> out;
+    for (const storage::PackedTriangle& t : triangles)
+        for (const storage::PackedVertex& v : t.vertices) {
+            const std::array<std::uint32_t, 3> q = grid.quantize(v.position);
+            if (q[0] == lo || q[0] == hi || q[2] == lo || q[2] == hi)
+                out.insert(q);
+        }
+    return out;
+}
+
+TEST(StandInTest, AFlatSheetOfOneColourSimplifiesWithoutErrorAndKeepsItsBorder) {
+    const storage::PositionGrid grid = gridFor();
+    const auto source = sheet([](int, int) { return std::array<std::uint8_t, 4>{90, 120, 60, 255}; });
+    const std::optional<StandIn> standIn = simplifySource(source, 0.25f, grid);
+    ASSERT_TRUE(standIn.has_value());
+    EXPECT_LE(standIn->triangles.size(), source.size() * 6 / 10);
+    EXPECT_FLOAT_EQ(standIn->error, 0.25f) << "flat and alike: only the error it was given";
+    // The border's vertices all stay (a neighbour drawn at another level meets them).
+    EXPECT_EQ(borderCorners(standIn->triangles, grid), borderCorners(source, grid));
+}
+
+TEST(StandInTest, AColourEdgeAcrossAFlatSheetCountsAsError) {
+    // Flat, so meshoptimizer's error is 0; the colour steps from green to white at x = 24.5.
+    const storage::PositionGrid grid = gridFor();
+    const auto source = sheet([](int x, int) {
+        return x <= kCells / 2 ? std::array<std::uint8_t, 4>{40, 160, 40, 255}
+                               : std::array<std::uint8_t, 4>{250, 250, 250, 255};
+    });
+    const std::optional<StandIn> standIn = simplifySource(source, 0.0f, grid);
+    ASSERT_TRUE(standIn.has_value());
+    // A removed vertex beside the edge takes a colour from across it, a unit or more away.
+    EXPECT_GE(standIn->error, 1.0f);
+    EXPECT_LT(standIn->error, static_cast<float>(kCells));
+}
+
+TEST(StandInTest, ShadingDifferenceWeighsColourAndNormalSteps) {
+    const storage::PackedVertex a = vertexAt(0, 0, 0.0f, {100, 100, 100, 255});
+    storage::PackedVertex b = a;
+    EXPECT_EQ(shadingDifference(a, b), 0.0f);
+    b.color = {116, 100, 100, 255}; // half a colour step
+    EXPECT_NEAR(shadingDifference(a, b), 16.0f / kShadingColourStep, 1e-6f);
+    b.color = a.color;
+    const float turned = kShadingNormalStepDegrees * 3.14159265f / 180.0f;
+    b.normalOct = storage::encodeOctNormal(std::sin(turned), std::cos(turned), 0.0f);
+    EXPECT_NEAR(shadingDifference(a, b), 1.0f, 0.02f);
+    b.normalOct = storage::kUnlitNormalOct;
+    EXPECT_EQ(shadingDifference(a, b), 1.0f) << "lit against unlit";
+}
+
+} // namespace
+} // namespace ff::builder
