@@ -36,6 +36,7 @@ struct ChunkOutput {
     std::optional<ChunkClustersV2> clusters; ///< format 2: its clusters, its triangles freed
     PrototypeSummary summary;
     std::uint64_t leafNodes = 0;
+    StandInCounts standInCounts;
 };
 
 /** A cell above the chunks of a partitioned prototype. */
@@ -111,7 +112,8 @@ Result<ChunkOutput> buildChunk(
     StandInSource rootSource{{}, 0.0f, false};
     if (positionGrid != nullptr && params.standIns) {
         FF_ASSIGN_OR_RETURN(
-                standIns, buildStandIns(built.nodes, triangles, *positionGrid, {}, 1, &rootSource));
+                standIns,
+                buildStandIns(built.nodes, triangles, *positionGrid, {}, 1, &rootSource, out.standInCounts));
         if (rootSource.triangles.size() > kMaxCarriedStandInSource)
             rootSource = StandInSource{{}, 0.0f, false};
     }
@@ -246,6 +248,7 @@ Result<PrototypeBuildResult> PrototypeBuilder::writeInMemoryV2(
     result.clusters = written.clusters;
     result.standIns = written.standIns;
     result.standInClusters = written.standInClusters;
+    result.standInCounts = written.standInCounts;
     result.record.boundsMin = input.rootParent.min;
     result.record.boundsMax = input.rootParent.max;
     result.record.nodeCount = written.nodes;
@@ -299,6 +302,7 @@ Result<PrototypeBuildResult> PrototypeBuilder::finishChunkedV2(
     result.standIns += written.standIns + levels.standIns();
     result.standInClusters += written.standInClusters;
     result.standInClusters += levels.standInStats();
+    result.standInCounts += written.standInCounts;
     result.nodes = written.nodes + levels.nodes(); // the chunk roots are the tree above's
     result.leafNodes = written.leafNodes + levels.leafNodes();
     result.geometryPages = written.geometryPages + levels.geometryPages();
@@ -496,6 +500,7 @@ Result<PrototypeBuildResult> PrototypeBuilder::buildChunked(
                 return chunk.status();
             if (levelsV2) {
                 result.clusters += chunk->clusters->stats;
+                result.standInCounts += chunk->standInCounts;
                 FF_RETURN_IF_ERROR(levelsV2->append(chunk->encoded, *chunk->clusters));
             }
             else

@@ -43,6 +43,7 @@ struct PrototypeBuildResult {
     ClusterBuildStats clusters;        ///< a v2 build's encoding
     std::uint64_t standIns = 0;        ///< a v2 build's stand-ins (StandIns.h)
     ClusterBuildStats standInClusters; ///< and their encoding
+    StandInCounts standInCounts;       ///< what became of each cell that could have had one
     PrototypeSummary summary;
     std::uint64_t nodes = 0;
     std::uint64_t leafNodes = 0;

@@ -323,6 +323,9 @@ Result<BuildReport> SceneBuilder::finish() {
         report.standInNodes += built.standIns;
         report.standInTriangles += built.standInClusters.trianglesKept;
         report.standInBytes += built.standInClusters.encodedBytes;
+        report.standInsNotReducing += built.standInCounts.notReducing;
+        report.standInsTooSmall += built.standInCounts.tooSmall;
+        report.standInsTooLarge += built.standInCounts.tooLarge;
         summaries.push_back(std::move(built.summary));
         names.push_back(proto.name);
         report.storedTriangles += built.record.triangleCount;
@@ -482,7 +485,14 @@ std::string buildReportJson(const BuildReport& r) {
             {"decomposition", r.decomposition},
             {"cluster_leaf_triangles", r.clusterLeafTriangles},
             {"cluster_nodes", r.clusterNodes},
-            {"stand_ins", {{"enabled", r.standIns}, {"nodes", r.standInNodes}, {"triangles", r.standInTriangles}, {"bytes", r.standInBytes}}},
+            {"stand_ins",
+             {{"enabled", r.standIns},
+              {"nodes", r.standInNodes},
+              {"triangles", r.standInTriangles},
+              {"bytes", r.standInBytes},
+              {"not_reducing", r.standInsNotReducing},
+              {"too_small", r.standInsTooSmall},
+              {"too_large", r.standInsTooLarge}}},
             {"nodes", r.nodes},
             {"leaf_nodes", r.leafNodes},
             {"depth", r.maxDepth},

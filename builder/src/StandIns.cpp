@@ -102,7 +102,8 @@ Result<std::vector<std::optional<StandIn>>> buildStandIns(
         const storage::PositionGrid& grid,
         std::span<const PlacedSource> placed,
         unsigned threads,
-        StandInSource* rootSource) {
+        StandInSource* rootSource,
+        StandInCounts& counts) {
     FF_ASSERT(!nodes.empty());
     std::unordered_map<std::uint32_t, const StandInSource*> placedSources;
     for (const PlacedSource& p : placed)
@@ -129,6 +130,8 @@ Result<std::vector<std::optional<StandIn>>> buildStandIns(
 
     std::vector<std::optional<StandIn>> standIns(nodes.size());
     std::vector<StandInSource> sources(nodes.size());
+    enum class Outcome : std::uint8_t { None, Kept, NotReducing, TooSmall, TooLarge };
+    std::vector<Outcome> outcomes(nodes.size(), Outcome::None);
     for (std::size_t d = byDepth.size(); d-- > 0;) {
         const std::vector<std::uint32_t>& level = byDepth[d];
         FF_RETURN_IF_ERROR(parallelFor(level.size(), threads, [&] {
@@ -157,6 +160,7 @@ Result<std::vector<std::optional<StandIn>>> buildStandIns(
                 }
                 if (!source.usable || size > kMaxStandInSource) {
                     source = StandInSource{{}, 0.0f, false};
+                    outcomes[n] = Outcome::TooLarge;
                     return Status::ok();
                 }
                 source.triangles.reserve(size);
@@ -167,7 +171,17 @@ Result<std::vector<std::optional<StandIn>>> buildStandIns(
                     source.triangles.insert(
                             source.triangles.end(), child.triangles.begin(), child.triangles.end());
                 }
+                // A leaf below the root is left to its parent, which simplifies it from its
+                // own triangles rather than from a simplification of them: errors add up a
+                // level less (on the 4 M terrain at 6 radii 103 k triangles drawn against 234 k
+                // with leaf stand-ins, as accurate) and a quarter of the nodes carry one.
+                const bool leafBelowRoot = node.childCount == 0 && n != 0;
+                if (source.triangles.size() < kMinStandInSource || leafBelowRoot) {
+                    outcomes[n] = Outcome::TooSmall;
+                    return Status::ok();
+                }
                 standIns[n] = simplifySource(source.triangles, source.error, grid);
+                outcomes[n] = standIns[n] ? Outcome::Kept : Outcome::NotReducing;
                 if (standIns[n]) {
                     source.triangles = standIns[n]->triangles;
                     source.error = standIns[n]->error;
@@ -182,6 +196,12 @@ Result<std::vector<std::optional<StandIn>>> buildStandIns(
     }
     if (rootSource != nullptr)
         *rootSource = std::move(sources[0]);
+    for (const Outcome outcome : outcomes) {
+        counts.kept += outcome == Outcome::Kept ? 1 : 0;
+        counts.notReducing += outcome == Outcome::NotReducing ? 1 : 0;
+        counts.tooSmall += outcome == Outcome::TooSmall ? 1 : 0;
+        counts.tooLarge += outcome == Outcome::TooLarge ? 1 : 0;
+    }
     return standIns;
 }
 

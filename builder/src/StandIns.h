@@ -4,7 +4,8 @@
 // its whole subtree, drawn instead of it where the copy's error projects below ε pixels.
 //
 // Built bottom-up as Nanite builds its cluster groups: a node's source is its own triangles and
-// each child's stand-in (or, where a child kept none, that child's source); the source is
+// each child's stand-in (or, where a child kept none, that child's source; a leaf below the
+// root keeps none: its parent simplifies its triangles); the source is
 // simplified with meshoptimizer (meshopt_simplify, its quadric error) with the mesh's border
 // locked, and kept when it halves the triangles enough to pay. A cell's border is where its
 // neighbours' triangles begin, so the edges there are the original ones on both sides, whatever
@@ -65,11 +66,28 @@ inline constexpr double kStandInTargetShare = 0.25;
         float baseError,
         const storage::PositionGrid& grid);
 
+/** What became of the cells that could have had a stand-in (the build report's "why"). */
+struct StandInCounts {
+    std::uint64_t kept = 0;
+    std::uint64_t notReducing = 0; ///< simplified to more than kMaxStandInShare: not kept
+    std::uint64_t tooSmall = 0;    ///< leaves below the root, sources under kMinStandInSource
+    std::uint64_t tooLarge = 0;    ///< sources over kMaxStandInSource, or below an instance or a
+                                   ///< chunk whose source was not handed up: not tried
+    StandInCounts& operator+=(const StandInCounts& other) noexcept {
+        kept += other.kept;
+        notReducing += other.notReducing;
+        tooSmall += other.tooSmall;
+        tooLarge += other.tooLarge;
+        return *this;
+    }
+};
+
 /**
  * Stand-ins of a hierarchy (nodes[0] the root, children after their parents): one entry per
  * node, set where a stand-in was kept. `placed` gives the sources of nodes whose subtrees were
  * built elsewhere (a chunk's root, by node index; absent: no source). `rootSource` gets the
- * root's source for a tree above. Deterministic whatever `threads`.
+ * root's source for a tree above; `counts` what became of each cell. Deterministic whatever
+ * `threads`.
  */
 struct PlacedSource {
     std::uint32_t node = 0;
@@ -81,6 +99,7 @@ struct PlacedSource {
         const storage::PositionGrid& grid,
         std::span<const PlacedSource> placed,
         unsigned threads,
-        StandInSource* rootSource);
+        StandInSource* rootSource,
+        StandInCounts& counts);
 
 } // namespace ff::builder

@@ -186,7 +186,14 @@ Result<SubtreeV2Result> writeSubtreeV2(
                         sources.push_back({p.node, &p.standInSource});
                 FF_ASSIGN_OR_RETURN(
                         std::vector<std::optional<StandIn>> standIns,
-                        buildStandIns(nodes, triangles, *input.grid, sources, input.threads, nullptr));
+                        buildStandIns(
+                                nodes,
+                                triangles,
+                                *input.grid,
+                                sources,
+                                input.threads,
+                                nullptr,
+                                result.standInCounts));
                 for (std::size_t i = 0; i < tree.order.size(); ++i) {
                     const std::optional<StandIn>& standIn = standIns[tree.order[i]];
                     runs[i] = standIn ? std::span<const storage::PackedTriangle>(standIn->triangles)

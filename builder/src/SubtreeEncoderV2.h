@@ -97,6 +97,7 @@ struct SubtreeV2Result {
     ClusterBuildStats clusters; ///< the nodes' own triangles
     std::uint64_t standIns = 0;
     ClusterBuildStats standInClusters;
+    StandInCounts standInCounts;
 };
 
 /**
