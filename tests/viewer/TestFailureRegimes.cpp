@@ -10,6 +10,7 @@
 
 #include <cstdio>
 #include <fstream>
+#include <set>
 #include <string>
 
 namespace ff::viewer::test {
@@ -210,6 +211,33 @@ TEST(FailureRegimeTest, ASceneFarFromTheOriginAndTinyRendersLikeTheOriginal) {
 // Popping and flicker along a slow fly-through: temporal instability (docs/metrics.md) of the
 // hierarchy against all geometry, 12 frames moving 0.2 % of the scene radius each, synchronous.
 // Measured when written: mean 0.00031, worst frame pair 0.00038 (linear luminance, 0..1).
+/** The frames of `replay --sync` of `scene` along `path` at `epsilon` (160 x 120). */
+std::vector<runtime::Image> replayFrames(
+        const fs::path& dir,
+        const fs::path& scene,
+        const fs::path& path,
+        const std::string& epsilon,
+        const std::string& name,
+        const std::vector<std::string>& flags = {}) {
+    const fs::path frames = dir / name;
+    fs::create_directories(frames);
+    const ProcessResult r = runFarfield(
+            concat({"replay", scene.string(), path.string(), "--sync", "--size", "160x120", "--epsilon", epsilon,
+                    "--frames-dir", frames.string()},
+                   flags),
+            dir);
+    EXPECT_EQ(r.exitCode, 0) << r.describe();
+    std::vector<runtime::Image> images;
+    for (int f = 0;; ++f) {
+        char file[32];
+        std::snprintf(file, sizeof(file), "frame-%05d.png", f);
+        if (!fs::exists(frames / file))
+            break;
+        images.push_back(decodeImage(frames / file));
+    }
+    return images;
+}
+
 TEST(FailureRegimeTest, PoppingAlongASlowFlyThroughIsBounded) {
     const fs::path dir = freshTestDir();
     const fs::path scene = buildScene(dir, "forest.ffs", {"--generate", "forest:trees=16"});
@@ -221,25 +249,58 @@ TEST(FailureRegimeTest, PoppingAlongASlowFlyThroughIsBounded) {
             {"time": 0.0, "position": [-40, 12, -40], "target": [0, 3, 0], "fov": 45},
             {"time": 1.0, "position": [-39.4, 12, -39.8], "target": [0, 3, 0], "fov": 45}]})";
     }
-    auto replay = [&](const std::string& epsilon, const fs::path& frames) {
-        fs::create_directories(frames);
-        const ProcessResult r = runFarfield({"replay", scene.string(), path.string(), "--sync", "--size", "160x120",
-                                             "--epsilon", epsilon, "--frames-dir", frames.string()}, dir);
-        EXPECT_EQ(r.exitCode, 0) << r.describe();
-        std::vector<runtime::Image> images;
-        for (int f = 0;; ++f) {
-            char name[32];
-            std::snprintf(name, sizeof(name), "frame-%05d.png", f);
-            if (!fs::exists(frames / name))
-                break;
-            images.push_back(decodeImage(frames / name));
-        }
-        return images;
-    };
-    const std::vector<runtime::Image> approximation = replay("1", dir / "approximation");
-    const std::vector<runtime::Image> reference = replay("0", dir / "reference");
+    const std::vector<runtime::Image> approximation = replayFrames(dir, scene, path, "1", "approximation");
+    const std::vector<runtime::Image> reference = replayFrames(dir, scene, path, "0", "reference");
     ASSERT_EQ(approximation.size(), 12u);
     ASSERT_EQ(reference.size(), 12u);
+    const Result<runtime::TemporalInstability> instability = runtime::temporalInstability(approximation, reference);
+    ASSERT_TRUE(instability.isOk()) << instability.status().toString();
+    std::printf("temporal instability: mean %.5f, worst frame pair %.5f\n", instability->mean, instability->maxFrame);
+    EXPECT_LE(instability->mean, 0.0015);
+    EXPECT_LE(instability->maxFrame, 0.003);
+}
+
+TEST(FailureRegimeTest, StandInsSwitchingAlongASlowFlightStayWithinThePoppingBound) {
+    // A terrain with stand-ins, flown over low and slowly enough that cells switch between a
+    // stand-in and the triangles below it, or between stand-ins of two levels, as they come
+    // nearer: the same bound as the cubes' popping above.
+    const fs::path dir = freshTestDir();
+    const fs::path scene = buildScene(
+            dir, "terrain.ffs", {"--generate", "terrain:triangles=200000", "--format", "2", "--stand-ins"});
+    const fs::path path = dir / "low.json";
+    {
+        std::ofstream out(path);
+        out << R"({"interpolation": "linear", "frames": 12, "keyframes": [
+            {"time": 0.0, "position": [-120, 25, -120], "target": [40, 0, 40], "fov": 45},
+            {"time": 1.0, "position": [-100, 24, -102], "target": [40, 0, 40], "fov": 45}]})";
+    }
+    const fs::path csv = dir / "frames.csv";
+    const std::vector<runtime::Image> approximation =
+            replayFrames(dir, scene, path, "1", "approximation", {"--csv", csv.string()});
+    const std::vector<runtime::Image> reference = replayFrames(dir, scene, path, "0", "reference");
+    ASSERT_EQ(approximation.size(), 12u);
+    ASSERT_EQ(reference.size(), 12u);
+    // Stand-ins were drawn, and how many changed along the flight.
+    std::ifstream rows(csv);
+    std::string header;
+    std::getline(rows, header);
+    std::size_t column = 0;
+    for (std::size_t at = 0, next = 0; (next = header.find(',', at)) != std::string::npos || at < header.size();
+         at = next + 1, ++column) {
+        if (header.substr(at, next == std::string::npos ? std::string::npos : next - at) == "stand_ins")
+            break;
+        if (next == std::string::npos)
+            FAIL() << "no stand_ins column in " << header;
+    }
+    std::set<long> counts;
+    for (std::string row; std::getline(rows, row);) {
+        std::size_t at = 0;
+        for (std::size_t c = 0; c < column; ++c)
+            at = row.find(',', at) + 1;
+        counts.insert(std::stol(row.substr(at)));
+    }
+    EXPECT_GT(*counts.rbegin(), 0) << "no stand-in drawn";
+    EXPECT_GT(counts.size(), 1u) << "the cut never changed: nothing switched";
     const Result<runtime::TemporalInstability> instability = runtime::temporalInstability(approximation, reference);
     ASSERT_TRUE(instability.isOk()) << instability.status().toString();
     std::printf("temporal instability: mean %.5f, worst frame pair %.5f\n", instability->mean, instability->maxFrame);
