@@ -174,6 +174,8 @@ Result<HierarchySummary> checkHierarchyV2(
             FF_RETURN_IF_ERROR(readRepresentationsV2(payload, where.page, node, representations));
             if (!representations.empty() && at.prototype == kInstanceLevel)
                 return corrupt(where.page, slot + "the instance level holds no payloads");
+            if (std::any_of(representations.begin(), representations.end(), isStandIn))
+                ++summary.standIns;
             for (const RepresentationRecord& r : representations) {
                 if (r.kind != RepresentationKind::Clusters)
                     return corrupt(
@@ -183,7 +185,6 @@ Result<HierarchySummary> checkHierarchyV2(
                         clusterPages.trianglesOf(r, static_cast<std::uint32_t>(at.prototype)));
                 ++summary.representations;
                 if (isStandIn(r)) { // a simplified copy of what is below: not stored triangles
-                    ++summary.standIns;
                     summary.standInTriangles += triangles;
                     continue;
                 }

@@ -51,7 +51,9 @@ int runCheck(const CheckArgs& args) {
                                 {"representations", hierarchy->representations},
                                 {"clusters", hierarchy->clusters},
                                 {"cluster_pages", hierarchy->clusterPages},
-                                {"triangles", hierarchy->triangles}};
+                                {"triangles", hierarchy->triangles},
+                                {"stand_ins", hierarchy->standIns},
+                                {"stand_in_triangles", hierarchy->standInTriangles}};
         if (!status.isOk()) {
             out["error"] = status.message();
             out["code"] = errorCodeName(status.code());
@@ -64,11 +66,14 @@ int runCheck(const CheckArgs& args) {
         std::printf("%s: ok, %llu pages of %u bytes verified\n", args.scene.c_str(),
                     static_cast<unsigned long long>((*scene)->pageCount()), (*scene)->pageSize());
         if (hierarchy)
-            std::printf("format 2: %llu nodes, %llu clusters in %llu pages, %llu triangles decoded\n",
+            std::printf("format 2: %llu nodes, %llu clusters in %llu pages, %llu triangles decoded, "
+                        "%llu stand-ins of %llu triangles\n",
                         static_cast<unsigned long long>(hierarchy->nodes),
                         static_cast<unsigned long long>(hierarchy->clusters),
                         static_cast<unsigned long long>(hierarchy->clusterPages),
-                        static_cast<unsigned long long>(hierarchy->triangles));
+                        static_cast<unsigned long long>(hierarchy->triangles),
+                        static_cast<unsigned long long>(hierarchy->standIns),
+                        static_cast<unsigned long long>(hierarchy->standInTriangles));
     }
     return 0;
 }

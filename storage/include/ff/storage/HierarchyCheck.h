@@ -20,7 +20,7 @@ struct HierarchySummary {
     std::uint64_t clusters = 0;
     std::uint64_t triangles = 0;    ///< stored: each prototype's once
     std::uint64_t clusterPages = 0; ///< Geometry pages a representation names
-    std::uint64_t standIns = 0;     ///< representations that stand in for a subtree
+    std::uint64_t standIns = 0;     ///< nodes with a stand-in for their subtree
     std::uint64_t standInTriangles = 0; ///< theirs (not among `triangles`)
 };
 
