@@ -274,7 +274,7 @@ TEST(SceneV2Test, SameInputGivesTheSameBytesWhateverTheThreads) {
     EXPECT_EQ(fileBytes(dir / "a.ffs"), fileBytes(dir / "b.ffs"));
     // Stand-ins are simplified level by level on the threads (one prototype built whole).
     one.hierarchy.standIns = two.hierarchy.standIns = true;
-    const RecordingSink terrain = generate("terrain:triangles=200000");
+    const RecordingSink terrain = generate("terrain:triangles=60000");
     EXPECT_GT(buildOrFail(terrain, dir / "c.ffs", one).standInNodes, 0u);
     buildOrFail(terrain, dir / "d.ffs", two);
     EXPECT_EQ(fileBytes(dir / "c.ffs"), fileBytes(dir / "d.ffs"));
