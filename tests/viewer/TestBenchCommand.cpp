@@ -135,7 +135,9 @@ TEST(BenchCommandTest, ViewsScenarioWritesOneRowPerMeasurementChartsAndReport) {
             "over_coverage_fraction",
             "reference_covered_pixels",
             "scene_triangles",
-            "scene_file_bytes"};
+            "scene_file_bytes",
+            "representation",
+            "stand_ins"};
     EXPECT_EQ(csv[0], expectedColumns);
     // full once (not swept), faces at eps 1 and 4.
     ASSERT_EQ(csv.size(), 4u);
