@@ -101,7 +101,8 @@ Result<ChunkOutput> buildChunk(
         int octant,
         const HierarchyParams& params,
         const VoxelGrid* grid,
-        const storage::PositionGrid* positionGrid) {
+        const storage::PositionGrid* positionGrid,
+        std::uint32_t pageSize) {
     BuiltHierarchy built = buildInMemoryHierarchy(triangles, cell, level, octant, params, grid);
     ChunkOutput out;
     out.summary = std::move(built.summary);
@@ -113,7 +114,15 @@ Result<ChunkOutput> buildChunk(
     if (positionGrid != nullptr && params.standIns) {
         FF_ASSIGN_OR_RETURN(
                 standIns,
-                buildStandIns(built.nodes, triangles, *positionGrid, {}, 1, &rootSource, out.standInCounts));
+                buildStandIns(
+                        built.nodes,
+                        triangles,
+                        *positionGrid,
+                        {},
+                        1,
+                        &rootSource,
+                        out.standInCounts,
+                        {maxStandInTriangles(pageSize), false}));
         if (rootSource.triangles.size() > kMaxCarriedStandInSource)
             rootSource = StandInSource{{}, 0.0f, false};
     }
@@ -488,10 +497,11 @@ Result<PrototypeBuildResult> PrototypeBuilder::buildChunked(
             const int level = node.level;
             const int octant = node.octant;
             const HierarchyParams params = mParams;
-            running.push_back(std::async(std::launch::async, [file, cell, level, octant, params, grid = mGrid, positionGrid]() -> Result<ChunkOutput> {
+            running.push_back(std::async(std::launch::async, [file, cell, level, octant, params, grid = mGrid, positionGrid, pageSize = mWriter.pageSize()]() -> Result<ChunkOutput> {
                 FF_ASSIGN_OR_RETURN(std::vector<storage::PackedTriangle> chunkTriangles, file->readAll());
                 file->remove();
-                return buildChunk(std::move(chunkTriangles), cell, level, octant, params, grid, positionGrid);
+                return buildChunk(
+                        std::move(chunkTriangles), cell, level, octant, params, grid, positionGrid, pageSize);
             }));
         }
         for (std::size_t c = begin; c < end; ++c) {

@@ -320,6 +320,8 @@ Result<BuildReport> SceneBuilder::finish() {
         report.clusterVertices += built.clusters.clusterVertices;
         report.clusterBytes += built.clusters.encodedBytes + built.standInClusters.encodedBytes;
         report.clusters += built.standInClusters.clusters;
+        report.wideClusters += built.standInClusters.wideClusters;
+        report.clusterVertices += built.standInClusters.clusterVertices;
         report.standInNodes += built.standIns;
         report.standInTriangles += built.standInClusters.trianglesKept;
         report.standInBytes += built.standInClusters.encodedBytes;

@@ -9,6 +9,7 @@
 #include <cmath>
 #include <cstdint>
 #include <unordered_map>
+#include <utility>
 #include <vector>
 
 namespace ff::builder {
@@ -67,15 +68,14 @@ public:
         : mVertices(vertices)
         , mKept(kept)
         , mCell(cell) {
-        for (std::size_t t = 0; t < kept.size() / 3; ++t) {
-            glm::vec3 lo = corner(t, 0);
-            glm::vec3 hi = lo;
-            for (int c = 1; c < 3; ++c) {
-                lo = glm::min(lo, corner(t, c));
-                hi = glm::max(hi, corner(t, c));
-            }
-            const std::array<std::int64_t, 3> from = cellOf(lo);
-            const std::array<std::int64_t, 3> to = cellOf(hi);
+        // A triangle is binned in every cell its bounds touch: large ones in a fine grid would
+        // take unbounded memory, so the cells grow until the entries are at most
+        // kEntriesPerTriangle a triangle on average.
+        const std::size_t triangles = kept.size() / 3;
+        while (entries() > kEntriesPerTriangle * triangles)
+            mCell *= 2.0f;
+        for (std::size_t t = 0; t < triangles; ++t) {
+            const auto [from, to] = cellRange(t);
             for (std::int64_t x = from[0]; x <= to[0]; ++x)
                 for (std::int64_t y = from[1]; y <= to[1]; ++y)
                     for (std::int64_t z = from[2]; z <= to[2]; ++z)
@@ -112,9 +112,9 @@ public:
                     }
             // A triangle binned only in ring r + 1 or beyond is at least r cells away.
             if (best.distance <= static_cast<float>(r) * mCell)
-                break;
+                return best;
         }
-        return best;
+        return Nearest{}; // not found for sure within the rings searched
     }
 
     [[nodiscard]] const storage::PackedVertex& vertex(std::uint32_t triangle, int c) const {
@@ -124,10 +124,34 @@ public:
         return positionOf(mVertices[mKept[3 * triangle + static_cast<std::size_t>(c)]]);
     }
 
-private:
-    /** Past this the nearest found so far is taken (cells are about the stand-in's triangle
-     *  spacing: a removed vertex lies within a ring or two of a kept triangle). */
+    /** Rings searched at most: a removed vertex lies within a ring or two of a kept triangle
+     *  on a surface; past this nearest() reports none (the caller counts that as the worst). */
     static constexpr std::int64_t kMaxRings = 16;
+
+private:
+    static constexpr std::size_t kEntriesPerTriangle = 16;
+
+    std::pair<std::array<std::int64_t, 3>, std::array<std::int64_t, 3>> cellRange(std::size_t t) const {
+        glm::vec3 lo = corner(t, 0);
+        glm::vec3 hi = lo;
+        for (int c = 1; c < 3; ++c) {
+            lo = glm::min(lo, corner(t, c));
+            hi = glm::max(hi, corner(t, c));
+        }
+        return {cellOf(lo), cellOf(hi)};
+    }
+    /** Cell entries binning every triangle at the current cell size would take. */
+    std::size_t entries() const {
+        std::size_t total = 0;
+        for (std::size_t t = 0; t < mKept.size() / 3; ++t) {
+            const auto [from, to] = cellRange(t);
+            std::size_t cells = 1;
+            for (std::size_t a = 0; a < 3; ++a)
+                cells *= static_cast<std::size_t>(to[a] - from[a] + 1);
+            total += cells;
+        }
+        return total;
+    }
 
     std::array<std::int64_t, 3> cellOf(const glm::vec3& p) const {
         return {static_cast<std::int64_t>(std::floor(p.x / mCell)),
@@ -205,8 +229,10 @@ float shadingError(
     }
     const glm::vec3 size = hi - lo;
     const float extent = std::max({size.x, size.y, size.z});
+    if (!(extent > 0.0f))
+        return 0.0f; // every kept corner on one point: nothing is drawn
     // Cells about the stand-in's triangle spacing on a surface.
-    const float cell = std::max(extent / std::sqrt(static_cast<float>(kept.size() / 3)), 1e-30f);
+    const float cell = extent / std::sqrt(static_cast<float>(kept.size() / 3));
     const TriangleGrid grid(vertices, kept, cell);
     std::vector<bool> done(vertices.size(), false);
     float most = 0.0f;
@@ -216,8 +242,10 @@ float shadingError(
         done[v] = true;
         const glm::vec3 p = positionOf(vertices[v]);
         const TriangleGrid::Nearest at = grid.nearest(p);
-        if (!std::isfinite(at.distance))
+        if (!std::isfinite(at.distance)) {
+            most = std::max(most, extent); // far from every kept triangle: assume the worst
             continue;
+        }
         const float difference = shadingDifference(vertices[v], interpolate(grid, at.triangle, at.weights));
         if (!(difference > 0.0f))
             continue;

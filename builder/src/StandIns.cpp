@@ -82,7 +82,8 @@ std::optional<StandIn> simplifySource(
             1.0f,
             meshopt_SimplifyLockBorder,
             &relativeError);
-    if (static_cast<double>(keptIndices / 3) > kMaxStandInShare * static_cast<double>(triangles))
+    if (keptIndices == 0 ||
+        static_cast<double>(keptIndices / 3) > kMaxStandInShare * static_cast<double>(triangles))
         return std::nullopt;
 
     kept.resize(keptIndices);
@@ -96,6 +97,12 @@ std::optional<StandIn> simplifySource(
     return out;
 }
 
+std::size_t maxStandInTriangles(std::uint32_t pageSize) noexcept {
+    constexpr std::size_t kPages = 8;
+    constexpr std::size_t kBytesPerTriangle = 10; // measured 8.1-8.3 encoded, plus page slack
+    return kPages * storage::pagePayloadBytes(pageSize) / kBytesPerTriangle;
+}
+
 Result<std::vector<std::optional<StandIn>>> buildStandIns(
         const std::vector<BuildNode>& nodes,
         std::span<const storage::PackedTriangle> triangles,
@@ -103,7 +110,8 @@ Result<std::vector<std::optional<StandIn>>> buildStandIns(
         std::span<const PlacedSource> placed,
         unsigned threads,
         StandInSource* rootSource,
-        StandInCounts& counts) {
+        StandInCounts& counts,
+        const StandInLimits& limits) {
     FF_ASSERT(!nodes.empty());
     std::unordered_map<std::uint32_t, const StandInSource*> placedSources;
     for (const PlacedSource& p : placed)
@@ -175,12 +183,17 @@ Result<std::vector<std::optional<StandIn>>> buildStandIns(
                 // own triangles rather than from a simplification of them: errors add up a
                 // level less (on the 4 M terrain at 6 radii 103 k triangles drawn against 234 k
                 // with leaf stand-ins, as accurate) and a quarter of the nodes carry one.
-                const bool leafBelowRoot = node.childCount == 0 && n != 0;
+                const bool leafBelowRoot = node.childCount == 0 && (n != 0 || !limits.rootIsTop);
                 if (source.triangles.size() < kMinStandInSource || leafBelowRoot) {
                     outcomes[n] = Outcome::TooSmall;
                     return Status::ok();
                 }
                 standIns[n] = simplifySource(source.triangles, source.error, grid);
+                if (standIns[n] && standIns[n]->triangles.size() > limits.maxTriangles) {
+                    standIns[n].reset();
+                    outcomes[n] = Outcome::TooLarge;
+                    return Status::ok(); // its source goes up whole, as for a source too large
+                }
                 outcomes[n] = standIns[n] ? Outcome::Kept : Outcome::NotReducing;
                 if (standIns[n]) {
                     source.triangles = standIns[n]->triangles;

@@ -19,6 +19,7 @@
 #include <ff/storage/Status.h>
 
 #include <cstdint>
+#include <limits>
 #include <optional>
 #include <span>
 #include <vector>
@@ -71,8 +72,9 @@ struct StandInCounts {
     std::uint64_t kept = 0;
     std::uint64_t notReducing = 0; ///< simplified to more than kMaxStandInShare: not kept
     std::uint64_t tooSmall = 0;    ///< leaves below the root, sources under kMinStandInSource
-    std::uint64_t tooLarge = 0;    ///< sources over kMaxStandInSource, or below an instance or a
-                                   ///< chunk whose source was not handed up: not tried
+    std::uint64_t tooLarge = 0;    ///< sources over kMaxStandInSource or stand-ins over
+                                   ///< StandInLimits::maxTriangles, or above an instance or a
+                                   ///< chunk whose source was not handed up
     StandInCounts& operator+=(const StandInCounts& other) noexcept {
         kept += other.kept;
         notReducing += other.notReducing;
@@ -81,6 +83,20 @@ struct StandInCounts {
         return *this;
     }
 };
+
+/** What a hierarchy's stand-ins must keep to. */
+struct StandInLimits {
+    /** A larger stand-in is not kept: its representations (one a page) must fit its node's
+     *  page beside its siblings' (maxStandInTriangles). */
+    std::size_t maxTriangles = std::numeric_limits<std::size_t>::max();
+    /** False for a chunk's root, which is a node below its prototype's root: a leaf there gets
+     *  no stand-in either. */
+    bool rootIsTop = true;
+};
+
+/** The largest stand-in a file of `pageSize` pages keeps: about eight cluster pages of it (at
+ *  ~10 bytes a stand-in triangle), so a block of eight siblings with theirs fits a Nodes page. */
+std::size_t maxStandInTriangles(std::uint32_t pageSize) noexcept;
 
 /**
  * Stand-ins of a hierarchy (nodes[0] the root, children after their parents): one entry per
@@ -100,6 +116,7 @@ struct PlacedSource {
         std::span<const PlacedSource> placed,
         unsigned threads,
         StandInSource* rootSource,
-        StandInCounts& counts);
+        StandInCounts& counts,
+        const StandInLimits& limits = {});
 
 } // namespace ff::builder

@@ -193,7 +193,8 @@ Result<SubtreeV2Result> writeSubtreeV2(
                                 sources,
                                 input.threads,
                                 nullptr,
-                                result.standInCounts));
+                                result.standInCounts,
+                                {maxStandInTriangles(writer.pageSize()), true}));
                 for (std::size_t i = 0; i < tree.order.size(); ++i) {
                     const std::optional<StandIn>& standIn = standIns[tree.order[i]];
                     runs[i] = standIn ? std::span<const storage::PackedTriangle>(standIn->triangles)

@@ -374,9 +374,13 @@ Fetch NodePages::collectPayload(
         const auto found = std::find_if(
                 mRepresentations.begin(), mRepresentations.end(), storage::isStandIn);
         if (found != mRepresentations.end() && view.accepts(found->parameter)) {
-            standIn = true;
             out.clear();
-            return admit(clusterRuns(node, priority, out, true), uploads, out);
+            if (admit(clusterRuns(node, priority, out, true), uploads, out) == Fetch::Ready) {
+                standIn = true;
+                return Fetch::Ready;
+            }
+            // Asked for; until it is resident (or if its page failed) the cell is refined as
+            // without it, so what was drawn finer does not turn into a cube meanwhile.
         }
     }
     return collectGeometry(node, priority, uploads, out);

@@ -185,9 +185,9 @@ public:
             float priority,
             IUploadGate& uploads,
             std::vector<PayloadRun>& out);
-    /** What a refined cell draws: its stand-in's runs if it has one `view` accepts
-     *  (`standIn` set: draw them instead of its own payload and children), else
-     *  collectGeometry()'s. Every page is asked for and admitted as in collectGeometry(). */
+    /** What a refined cell draws: its stand-in's runs if it has one `view` accepts and they
+     *  are all resident and admitted (`standIn` set: draw them instead of its own payload and
+     *  children), else collectGeometry()'s (the stand-in's pages stay asked for). */
     Fetch collectPayload(
             const storage::NodeRecord& node,
             const StandInView& view,

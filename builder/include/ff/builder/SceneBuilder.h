@@ -92,7 +92,7 @@ struct BuildReport {
     std::uint64_t standInBytes = 0;        ///< v2: their encoded clusters (within clusterBytes)
     std::uint64_t standInsNotReducing = 0; ///< v2: cells whose simplification kept over 0.6 x
     std::uint64_t standInsTooSmall = 0;    ///< v2: cells under 256 triangles to simplify
-    std::uint64_t standInsTooLarge = 0;    ///< v2: cells over 2^20, or above what could not be
+    std::uint64_t standInsTooLarge = 0;    ///< v2: sources over 2^20, stand-ins over a page limit, or above what could not be
     std::uint32_t maxGridBits = 0;         ///< v2: the largest prototype grid
     std::uint64_t instancedTriangles = 0;  ///< as drawn
     std::uint32_t prototypes = 0;
