@@ -12,6 +12,7 @@
 
 #include <array>
 #include <cmath>
+#include <limits>
 #include <set>
 #include <vector>
 
@@ -83,6 +84,30 @@ TEST(StandInTest, AColourEdgeAcrossAFlatSheetCountsAsError) {
     // A removed vertex beside the edge takes a colour from across it, a unit or more away.
     EXPECT_GE(standIn->error, 1.0f);
     EXPECT_LT(standIn->error, static_cast<float>(kCells));
+}
+
+TEST(StandInTest, TheLimitsDropStandInsTooLargeForAPageAndLeavesBelowTheTop) {
+    // One node holding the sheet: the root of a prototype (a stand-in of its own), or a chunk's
+    // root below it (a leaf: none), or with a stand-in larger than the limit allows (none).
+    const storage::PositionGrid grid = gridFor();
+    const auto triangles = sheet([](int, int) { return std::array<std::uint8_t, 4>{90, 120, 60, 255}; });
+    std::vector<BuildNode> nodes(1);
+    nodes[0].kind = static_cast<std::uint8_t>(storage::NodeKind::Cell);
+    nodes[0].triangleCount = triangles.size();
+    const auto build = [&](const StandInLimits& limits, StandInCounts& counts) {
+        return buildStandIns(nodes, triangles, grid, {}, 1, nullptr, counts, limits).value();
+    };
+    StandInCounts top;
+    EXPECT_TRUE(build({}, top)[0].has_value());
+    EXPECT_EQ(top.kept, 1u);
+    StandInCounts chunkRoot;
+    EXPECT_FALSE(build({std::numeric_limits<std::size_t>::max(), false}, chunkRoot)[0].has_value());
+    EXPECT_EQ(chunkRoot.tooSmall, 1u);
+    StandInCounts capped;
+    EXPECT_FALSE(build({16, true}, capped)[0].has_value());
+    EXPECT_EQ(capped.tooLarge, 1u);
+    // About eight pages at ~10 bytes a stand-in triangle.
+    EXPECT_EQ(maxStandInTriangles(4096), 8u * storage::pagePayloadBytes(4096) / 10u);
 }
 
 TEST(StandInTest, ShadingDifferenceWeighsColourAndNormalSteps) {
