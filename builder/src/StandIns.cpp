@@ -117,9 +117,8 @@ Result<std::vector<std::optional<StandIn>>> buildStandIns(
     for (const PlacedSource& p : placed)
         placedSources[p.node] = p.source;
 
-    // Depths from the root, so each level is simplified after the one below it (in parallel
+    // Nodes by depth from the root, so each level is simplified after the one below it (in parallel
     // within a level: its nodes' sources are disjoint).
-    std::vector<std::uint32_t> depth(nodes.size(), 0);
     std::vector<std::vector<std::uint32_t>> byDepth(1, {0});
     for (std::size_t d = 0; d < byDepth.size(); ++d) {
         std::vector<std::uint32_t> next;
@@ -127,10 +126,8 @@ Result<std::vector<std::optional<StandIn>>> buildStandIns(
             const BuildNode& node = nodes[n];
             if (node.placedChildren)
                 continue;
-            for (std::uint32_t c = 0; c < node.childCount; ++c) {
-                depth[node.firstChild + c] = static_cast<std::uint32_t>(d + 1);
+            for (std::uint32_t c = 0; c < node.childCount; ++c)
                 next.push_back(node.firstChild + c);
-            }
         }
         if (!next.empty())
             byDepth.push_back(std::move(next));
