@@ -373,15 +373,17 @@ Fetch NodePages::collectPayload(
         }
         const auto found = std::find_if(
                 mRepresentations.begin(), mRepresentations.end(), storage::isStandIn);
+        out.clear();
         if (found != mRepresentations.end() && view.accepts(found->parameter)) {
-            out.clear();
-            if (admit(clusterRuns(node, priority, out, true), uploads, out) == Fetch::Ready) {
+            if (admit(runsOf(priority, out, true), uploads, out) == Fetch::Ready) {
                 standIn = true;
                 return Fetch::Ready;
             }
             // Asked for; until it is resident (or if its page failed) the cell is refined as
             // without it, so what was drawn finer does not turn into a cube meanwhile.
+            out.clear();
         }
+        return admit(runsOf(priority, out, false), uploads, out); // the table read once
     }
     return collectGeometry(node, priority, uploads, out);
 }
@@ -447,6 +449,10 @@ Fetch NodePages::clusterRuns(
         const storage::NodeRecord& node, float priority, std::vector<PayloadRun>& out, bool standIn) {
     if (readRepresentations(node, priority) != Fetch::Ready)
         return Fetch::Missing;
+    return runsOf(priority, out, standIn);
+}
+
+Fetch NodePages::runsOf(float priority, std::vector<PayloadRun>& out, bool standIn) {
     Fetch result = Fetch::Ready;
     for (const storage::RepresentationRecord& r : mRepresentations) {
         if (r.kind != storage::RepresentationKind::Clusters || storage::isStandIn(r) != standIn)

@@ -222,6 +222,8 @@ private:
     /** The runs of its own clusters, or of its stand-in's (`standIn`). */
     Fetch clusterRuns(
             const storage::NodeRecord& node, float priority, std::vector<PayloadRun>& out, bool standIn);
+    /** The runs of mRepresentations (as readRepresentations() left them): own or stand-in. */
+    Fetch runsOf(float priority, std::vector<PayloadRun>& out, bool standIn);
     /** Drops the runs `uploads` refuses (counted; Missing then). */
     Fetch admit(Fetch result, IUploadGate& uploads, std::vector<PayloadRun>& out);
 
