@@ -241,7 +241,10 @@ Status runViews(const ViewsParams& p, const Scenario& scenario, const BenchOptio
              "scene_triangles",
              "scene_file_bytes",
              "representation",
-             "stand_ins"});
+             "stand_ins",
+             "splat_sets",
+             "splats",
+             "splat_size"});
     // A build sweep rebuilds the scene per value; otherwise one build and no value here.
     const std::vector<std::optional<nlohmann::json>> builds = [&] {
         std::vector<std::optional<nlohmann::json>> list;
@@ -333,7 +336,10 @@ Status runViews(const ViewsParams& p, const Scenario& scenario, const BenchOptio
                              sceneTriangles,
                              sceneBytes,
                              runtime::representationName(m.selection.representation),
-                             std::to_string(frame.stats.standInsDrawn)});
+                             std::to_string(frame.stats.standInsDrawn),
+                             std::to_string(frame.stats.splatSetsDrawn),
+                             std::to_string(frame.stats.splatsDrawn),
+                             formatNumber(m.selection.splats.pixels, 3)});
                 }
             }
         }

@@ -157,8 +157,25 @@ Status setMethodKey(MethodSpec& method, const std::string& key, const nlohmann::
                 value.is_string() ? runtime::parseRepresentation(value.get<std::string>()) : std::nullopt;
         if (!representation)
             return Status(ErrorCode::InvalidArgument,
-                          "representation: expected \"auto\", \"cube\" or \"simplified\", got " + value.dump());
+                          "representation: expected \"auto\", \"cube\", \"simplified\" or \"splats\", got " +
+                                  value.dump());
         method.selection.representation = *representation;
+        return Status::ok();
+    }
+    if (key == "splat_size") {
+        if (!value.is_number() || !(value.get<double>() >= 1.0 && value.get<double>() <= 3.0))
+            return Status(
+                    ErrorCode::InvalidArgument,
+                    "splat_size: expected a number of pixels in [1, 3], got " + value.dump());
+        method.selection.splats.pixels = value.get<float>();
+        return Status::ok();
+    }
+    if (key == "splat_shape") {
+        if (!value.is_string() || (value.get<std::string>() != "round" && value.get<std::string>() != "square"))
+            return Status(
+                    ErrorCode::InvalidArgument,
+                    "splat_shape: expected \"round\" or \"square\", got " + value.dump());
+        method.selection.splats.round = value.get<std::string>() == "round";
         return Status::ok();
     }
     if (key == "occlusion" || key == "coherence" || key == "oracle" || key == "cube_occluders") {
@@ -192,8 +209,8 @@ Status setMethodKey(MethodSpec& method, const std::string& key, const nlohmann::
     return Status(
             ErrorCode::InvalidArgument,
             "\"" + key +
-                    "\" is not a method key a sweep can vary (eps, cube_draw, cube_anisotropy, representation, occlusion, "
-                    "coherence, oracle, occlusion_backend, cube_occluders, opacity_threshold)");
+                    "\" is not a method key a sweep can vary (eps, cube_draw, cube_anisotropy, representation, splat_size, "
+                    "splat_shape, occlusion, coherence, oracle, occlusion_backend, cube_occluders, opacity_threshold)");
 }
 
 std::vector<MethodSpec> readMethods(ScenarioReader& reader) {

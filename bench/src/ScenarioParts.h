@@ -83,8 +83,8 @@ struct MethodSpec {
 
 /** Method keys a sweep may vary (the others, label and method, name what is swept). */
 inline constexpr const char* kSweepableMethodKeys[] = {
-        "eps", "cube_draw", "cube_anisotropy", "representation", "occlusion", "coherence", "oracle", "occlusion_backend",
-        "cube_occluders", "opacity_threshold"};
+        "eps",       "cube_draw",        "cube_anisotropy",   "representation", "splat_size", "splat_shape",
+        "occlusion", "coherence",        "oracle",            "occlusion_backend", "cube_occluders", "opacity_threshold"};
 
 /** Reads "methods" (a non-empty array; labels unique); errors go to the reader. */
 std::vector<MethodSpec> readMethods(ScenarioReader& reader);

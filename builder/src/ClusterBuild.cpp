@@ -21,6 +21,7 @@ ClusterBuildStats& ClusterBuildStats::operator+=(const ClusterBuildStats& other)
     clusterVertices += other.clusterVertices;
     encodedBytes += other.encodedBytes;
     wideClusters += other.wideClusters;
+    points += other.points;
     return *this;
 }
 
@@ -177,6 +178,43 @@ Result<ClusterBuildStats> ClusterEncoder::encode(
                 storage::readClusterInfo(std::span(out).subspan(start)));
         ++stats.clusters;
         stats.clusterVertices += used;
+        stats.encodedBytes += written;
+        stats.wideClusters += info.widePositions ? 1 : 0;
+    }
+    return stats;
+}
+
+Result<ClusterBuildStats> ClusterEncoder::encodePoints(
+        std::span<const storage::PackedVertex> points,
+        const storage::PositionGrid& grid,
+        std::vector<std::byte>& out) {
+    ClusterBuildStats stats;
+    if (points.empty())
+        return stats;
+    mPositions.resize(points.size() * 3);
+    for (std::size_t i = 0; i < points.size(); ++i)
+        for (std::size_t a = 0; a < 3; ++a)
+            mPositions[3 * i + a] = points[i].position[a];
+    mRemap.resize(points.size());
+    meshopt_spatialSortRemap(mRemap.data(), mPositions.data(), points.size(), 3 * sizeof(float));
+    mVertices.resize(points.size());
+    for (std::size_t i = 0; i < points.size(); ++i) // mRemap: old index -> new position
+        mVertices[mRemap[i]] = {grid.quantize(points[i].position), points[i].normalOct, points[i].color};
+    for (std::size_t first = 0; first < points.size(); first += storage::kMaxClusterVertices) {
+        const std::size_t count = std::min<std::size_t>(storage::kMaxClusterVertices, points.size() - first);
+        const std::size_t start = out.size();
+        out.resize(start + storage::encodedClusterBound(count, 0));
+        FF_ASSIGN_OR_RETURN(
+                const std::size_t written,
+                storage::encodeCluster(
+                        std::span(mVertices).subspan(first, count), {}, std::span(out).subspan(start)));
+        out.resize(start + written);
+        FF_ASSIGN_OR_RETURN(
+                const storage::ClusterInfo info,
+                storage::readClusterInfo(std::span(out).subspan(start)));
+        ++stats.clusters;
+        stats.clusterVertices += count;
+        stats.points += count;
         stats.encodedBytes += written;
         stats.wideClusters += info.widePositions ? 1 : 0;
     }

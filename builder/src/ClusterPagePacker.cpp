@@ -31,10 +31,12 @@ Status ClusterPagePacker::placeStandIn(
         std::span<const std::byte> clusters,
         std::uint32_t count,
         float error,
+        storage::RepresentationKind kind,
         std::vector<storage::RepresentationRecord>& out) {
     const std::size_t first = out.size();
     FF_RETURN_IF_ERROR(place(clusters, count, out));
     for (std::size_t r = first; r < out.size(); ++r) {
+        out[r].kind = kind;
         out[r].flags = static_cast<std::uint8_t>(out[r].flags | storage::kRepresentationStandIn);
         out[r].parameter = error;
     }

@@ -45,12 +45,14 @@ public:
           std::uint32_t count,
           std::vector<storage::RepresentationRecord>& out);
 
-    /** place() for a subtree's stand-in (StandIns.h): its representations are flagged
-     *  kRepresentationStandIn with `error` as their parameter. */
+    /** place() for a subtree's stand-in (StandIns.h): its representations are of `kind`
+     *  (Clusters: simplified; Splats), flagged kRepresentationStandIn with `error` as their
+     *  parameter. */
     [[nodiscard]] Status placeStandIn(
             std::span<const std::byte> clusters,
             std::uint32_t count,
             float error,
+            storage::RepresentationKind kind,
             std::vector<storage::RepresentationRecord>& out);
 
     /** Writes the open pages, if any. */

@@ -58,23 +58,30 @@ encodeChunkClusters(LevelledSubtree& chunk, const storage::PositionGrid& grid) {
             encoded.runs.push_back(r);
         }
         // A level's stand-ins after its own runs, in its bytes.
-        const auto encodeStandIn = [&](const std::optional<StandIn>& standIn) -> Result<EncodedRun> {
+        const auto encodeLevelStandIn = [&](const std::optional<StandIn>& standIn) -> Result<EncodedRun> {
+            EncodedRun r;
+            r.offset = encoded.bytes.size();
             if (!standIn)
-                return EncodedRun{};
+                return r;
             FF_ASSIGN_OR_RETURN(
-                    EncodedRun r,
-                    encodeRun(encoder, standIn->triangles, grid, encoded.bytes, out.standInStats));
+                    const ClusterBuildStats stats, encodeStandIn(encoder, *standIn, grid, encoded.bytes));
+            out.standInStats += stats;
+            r.bytes = encoded.bytes.size() - r.offset;
+            r.clusters = static_cast<std::uint32_t>(stats.clusters);
+            r.kept = stats.trianglesKept;
+            r.unlit = stats.trianglesUnlit;
             r.error = standIn->error;
+            r.kind = representationKindOf(standIn->kind);
             out.standIns += r.clusters > 0 ? 1 : 0;
             return r;
         };
         if (d == 0) {
-            FF_ASSIGN_OR_RETURN(out.rootStandIn, encodeStandIn(chunk.rootStandIn));
+            FF_ASSIGN_OR_RETURN(out.rootStandIn, encodeLevelStandIn(chunk.rootStandIn));
         }
         if (!level.standIns.empty()) {
             encoded.standIns.reserve(level.standIns.size());
             for (const std::optional<StandIn>& standIn : level.standIns) {
-                FF_ASSIGN_OR_RETURN(const EncodedRun r, encodeStandIn(standIn));
+                FF_ASSIGN_OR_RETURN(const EncodedRun r, encodeLevelStandIn(standIn));
                 encoded.standIns.push_back(r);
             }
         }
@@ -183,6 +190,7 @@ Status LevelRegionsV2::append(LevelledSubtree& chunk, ChunkClustersV2& clusters)
                 std::span(clusters.levels[0].bytes).subspan(standIn.offset, standIn.bytes),
                 standIn.clusters,
                 standIn.error,
+                standIn.kind,
                 root.representations));
     }
     root.standInSource = std::move(chunk.rootSource);
@@ -221,6 +229,7 @@ Status LevelRegionsV2::append(LevelledSubtree& chunk, ChunkClustersV2& clusters)
                         std::span(encoded.bytes).subspan(standIn.offset, standIn.bytes),
                         standIn.clusters,
                         standIn.error,
+                        standIn.kind,
                         r.representations));
             }
             repCount[i] = static_cast<std::uint32_t>(r.representations.size()) - first;

@@ -44,6 +44,7 @@ struct EncodedRun {
     std::uint64_t kept = 0; ///< triangles the codec kept
     std::uint64_t unlit = 0; ///< of them, unlit
     float error = 0.0f;      ///< a stand-in's (StandIns.h)
+    storage::RepresentationKind kind = storage::RepresentationKind::Clusters; ///< a stand-in's
 };
 
 /** A chunk's clusters, level by level, encoded on its worker thread. */

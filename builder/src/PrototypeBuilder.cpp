@@ -111,7 +111,7 @@ Result<ChunkOutput> buildChunk(
         FF_RETURN_IF_ERROR(shapeLeavesV2(built.nodes, triangles, leafShapeV2(params, *positionGrid, 1)));
     std::vector<std::optional<StandIn>> standIns;
     StandInSource rootSource{{}, 0.0f, false};
-    if (positionGrid != nullptr && params.standIns) {
+    if (positionGrid != nullptr && params.anyStandIns()) {
         FF_ASSIGN_OR_RETURN(
                 standIns,
                 buildStandIns(
@@ -122,7 +122,8 @@ Result<ChunkOutput> buildChunk(
                         1,
                         &rootSource,
                         out.standInCounts,
-                        {maxStandInTriangles(pageSize), false}));
+                        {maxStandInTriangles(pageSize), false},
+                        {params.standIns, params.splatSpacing}));
         if (rootSource.triangles.size() > kMaxCarriedStandInSource)
             rootSource = StandInSource{{}, 0.0f, false};
     }
@@ -241,7 +242,7 @@ Result<PrototypeBuildResult> PrototypeBuilder::writeInMemoryV2(
     input.grid = &encoding.grid;
     input.rootParent = {{boundsMin.x, boundsMin.y, boundsMin.z}, {boundsMax.x, boundsMax.y, boundsMax.z}};
     input.threads = mThreads;
-    input.standIns = mParams.standIns;
+    input.standIns = {mParams.standIns, mParams.splatSpacing};
     FF_RETURN_IF_ERROR(shapeLeavesV2(built.nodes, all, leafShapeV2(mParams, encoding.grid, mThreads)));
     PrototypeBuildResult result;
     result.summary = std::move(built.summary);
@@ -303,7 +304,7 @@ Result<PrototypeBuildResult> PrototypeBuilder::finishChunkedV2(
     input.rootParent = rootParent;
     input.placed = placed;
     input.threads = mThreads;
-    input.standIns = mParams.standIns;
+    input.standIns = {mParams.standIns, mParams.splatSpacing};
     FF_ASSIGN_OR_RETURN(
             const SubtreeV2Result written,
             writeSubtreeV2(mWriter, *mNodePageTable, std::move(nodes), ownTriangles, input));

@@ -115,8 +115,10 @@ Result<std::unique_ptr<SceneBuilder>> SceneBuilder::create(
         return Status(ErrorCode::InvalidArgument, "cube cost and large-triangle tolerance must be positive");
     if (options.formatVersion != storage::kFormatVersion && options.formatVersion != storage::kFormatVersion2)
         return Status(ErrorCode::InvalidArgument, "format version must be 1 or 2");
-    if (options.hierarchy.standIns && options.formatVersion != storage::kFormatVersion2)
-        return Status(ErrorCode::InvalidArgument, "stand-ins need format 2 (--format 2)");
+    if (options.hierarchy.anyStandIns() && options.formatVersion != storage::kFormatVersion2)
+        return Status(ErrorCode::InvalidArgument, "stand-ins and splats need format 2 (--format 2)");
+    if (options.hierarchy.splatSpacing < 0 || options.hierarchy.splatSpacing > 64)
+        return Status(ErrorCode::InvalidArgument, "splat spacing must be a cell's 1/1 to 1/64 (8-16 are usual)");
 
     auto impl = std::make_unique<Impl>();
     impl->outputPath = outputPath;
@@ -154,6 +156,7 @@ Result<std::unique_ptr<SceneBuilder>> SceneBuilder::create(
         impl->report.clusterLeafTriangles = options.hierarchy.leafTriangles();
         impl->report.clusterNodes = options.hierarchy.clusterNodes;
         impl->report.standIns = options.hierarchy.standIns;
+        impl->report.splatSpacing = options.hierarchy.splatSpacing;
     }
     impl->report.spillCodec = std::string(spillCodecName(options.spillCodec));
     return std::unique_ptr<SceneBuilder>(new SceneBuilder(std::move(impl)));
@@ -328,6 +331,10 @@ Result<BuildReport> SceneBuilder::finish() {
         report.standInsNotReducing += built.standInCounts.notReducing;
         report.standInsTooSmall += built.standInCounts.tooSmall;
         report.standInsTooLarge += built.standInCounts.tooLarge;
+        report.splatNodes += built.standInCounts.splats;
+        report.splats += built.standInClusters.points;
+        report.splatsNotReducing += built.standInCounts.splatsNotReducing;
+        report.splatsTooLarge += built.standInCounts.splatsTooLarge;
         summaries.push_back(std::move(built.summary));
         names.push_back(proto.name);
         report.storedTriangles += built.record.triangleCount;
@@ -495,6 +502,12 @@ std::string buildReportJson(const BuildReport& r) {
               {"not_reducing", r.standInsNotReducing},
               {"too_small", r.standInsTooSmall},
               {"too_large", r.standInsTooLarge}}},
+            {"splats",
+             {{"spacing", r.splatSpacing},
+              {"nodes", r.splatNodes},
+              {"points", r.splats},
+              {"not_reducing", r.splatsNotReducing},
+              {"too_large", r.splatsTooLarge}}},
             {"nodes", r.nodes},
             {"leaf_nodes", r.leafNodes},
             {"depth", r.maxDepth},

@@ -1,6 +1,7 @@
 #include "StandIns.h"
 
 #include "ParallelFor.h"
+#include "Splats.h"
 #include "StandInError.h"
 
 #include <ff/storage/Assert.h>
@@ -97,6 +98,19 @@ std::optional<StandIn> simplifySource(
     return out;
 }
 
+Result<ClusterBuildStats> encodeStandIn(
+        ClusterEncoder& encoder,
+        const StandIn& standIn,
+        const storage::PositionGrid& grid,
+        std::vector<std::byte>& out) {
+    FF_ASSIGN_OR_RETURN(ClusterBuildStats stats, encoder.encodePoints(standIn.points, grid, out));
+    if (!standIn.triangles.empty()) {
+        FF_ASSIGN_OR_RETURN(const ClusterBuildStats triangles, encoder.encode(standIn.triangles, grid, out));
+        stats += triangles;
+    }
+    return stats;
+}
+
 std::size_t maxStandInTriangles(std::uint32_t pageSize) noexcept {
     constexpr std::size_t kPages = 8;
     constexpr std::size_t kBytesPerTriangle = 10; // measured 8.1-8.3 encoded, plus page slack
@@ -111,7 +125,8 @@ Result<std::vector<std::optional<StandIn>>> buildStandIns(
         unsigned threads,
         StandInSource* rootSource,
         StandInCounts& counts,
-        const StandInLimits& limits) {
+        const StandInLimits& limits,
+        const StandInKinds& kinds) {
     FF_ASSERT(!nodes.empty());
     std::unordered_map<std::uint32_t, const StandInSource*> placedSources;
     for (const PlacedSource& p : placed)
@@ -137,6 +152,7 @@ Result<std::vector<std::optional<StandIn>>> buildStandIns(
     std::vector<StandInSource> sources(nodes.size());
     enum class Outcome : std::uint8_t { None, Kept, NotReducing, TooSmall, TooLarge };
     std::vector<Outcome> outcomes(nodes.size(), Outcome::None);
+    std::vector<SplatOutcome> splatOutcomes(nodes.size(), SplatOutcome::Empty);
     for (std::size_t d = byDepth.size(); d-- > 0;) {
         const std::vector<std::uint32_t>& level = byDepth[d];
         FF_RETURN_IF_ERROR(parallelFor(level.size(), threads, [&] {
@@ -185,18 +201,41 @@ Result<std::vector<std::optional<StandIn>>> buildStandIns(
                     outcomes[n] = Outcome::TooSmall;
                     return Status::ok();
                 }
-                standIns[n] = simplifySource(source.triangles, source.error, grid);
-                if (standIns[n] && standIns[n]->triangles.size() > limits.maxTriangles) {
-                    standIns[n].reset();
-                    outcomes[n] = Outcome::TooLarge;
-                    return Status::ok(); // its source goes up whole, as for a source too large
+                if (kinds.simplified) {
+                    standIns[n] = simplifySource(source.triangles, source.error, grid);
+                    outcomes[n] = standIns[n] ? Outcome::Kept : Outcome::NotReducing;
+                    if (standIns[n] && standIns[n]->triangles.size() > limits.maxTriangles) {
+                        standIns[n].reset();
+                        outcomes[n] = Outcome::TooLarge; // its source goes up whole
+                    }
+                    if (standIns[n]) {
+                        source.triangles = standIns[n]->triangles;
+                        source.error = standIns[n]->error;
+                        return Status::ok();
+                    }
                 }
-                outcomes[n] = standIns[n] ? Outcome::Kept : Outcome::NotReducing;
-                if (standIns[n]) {
-                    source.triangles = standIns[n]->triangles;
-                    source.error = standIns[n]->error;
+                if (kinds.splatSpacing > 0) {
+                    const glm::vec3 extent = node.boundsMax - node.boundsMin;
+                    const float spacing =
+                            std::max({extent.x, extent.y, extent.z}) / static_cast<float>(kinds.splatSpacing);
+                    SplatSet splats;
+                    splatOutcomes[n] =
+                            splatSource(source.triangles, spacing, source.error, grid, 0x5eed0000ull + n, splats);
+                    // A point costs about what a triangle does in a page.
+                    if (splatOutcomes[n] == SplatOutcome::Kept &&
+                        splats.points.size() + splats.triangles.size() > limits.maxTriangles)
+                        splatOutcomes[n] = SplatOutcome::TooLarge;
+                    if (splatOutcomes[n] == SplatOutcome::Kept) {
+                        standIns[n] = StandIn{
+                                std::move(splats.triangles), splats.error, StandInKind::Splats,
+                                std::move(splats.points)};
+                        outcomes[n] = Outcome::Kept;
+                    } else if (!kinds.simplified) {
+                        outcomes[n] = splatOutcomes[n] == SplatOutcome::TooLarge ? Outcome::TooLarge
+                                                                                 : Outcome::NotReducing;
+                    }
                 }
-                return Status::ok();
+                return Status::ok(); // the parent splats or simplifies this source whole
             };
         }));
         // The level below has been simplified into this one: its sources are spent.
@@ -206,6 +245,11 @@ Result<std::vector<std::optional<StandIn>>> buildStandIns(
     }
     if (rootSource != nullptr)
         *rootSource = std::move(sources[0]);
+    for (std::size_t n = 0; n < nodes.size(); ++n) {
+        counts.splats += standIns[n] && standIns[n]->kind == StandInKind::Splats ? 1u : 0u;
+        counts.splatsNotReducing += splatOutcomes[n] == SplatOutcome::NotReducing ? 1u : 0u;
+        counts.splatsTooLarge += splatOutcomes[n] == SplatOutcome::TooLarge ? 1u : 0u;
+    }
     for (const Outcome outcome : outcomes) {
         counts.kept += outcome == Outcome::Kept ? 1 : 0;
         counts.notReducing += outcome == Outcome::NotReducing ? 1 : 0;

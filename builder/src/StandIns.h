@@ -14,6 +14,9 @@
 
 #include "OctreeBuilder.h"
 
+#include <ff/builder/ClusterBuild.h>
+#include <ff/storage/NodeRecordV2.h>
+
 #include <ff/storage/ClusterCodec.h>
 #include <ff/storage/SceneFormat.h>
 #include <ff/storage/Status.h>
@@ -37,10 +40,26 @@ struct StandInSource {
     bool usable = true;
 };
 
-/** A node's stand-in as written: triangles and the error they promise. */
+/** What a stand-in draws its subtree with. */
+enum class StandInKind : std::uint8_t {
+    Simplified, ///< a simplified copy of the subtree's triangles
+    Splats,     ///< point splats and the triangles too large to splat (Splats.h)
+};
+
+/** A node's stand-in as written: what it draws and the error it promises. */
 struct StandIn {
     std::vector<storage::PackedTriangle> triangles;
     float error = 0.0f;
+    StandInKind kind = StandInKind::Simplified;
+    std::vector<storage::PackedVertex> points; ///< Splats: the splats
+};
+
+/** Which stand-ins a hierarchy's cells may get. Where both are asked for, a cell keeps its
+ *  simplified copy where one pays (it reduces and its shading holds), else its splats. */
+struct StandInKinds {
+    bool simplified = true;
+    /** Splats at 1/splatSpacing of the cell's largest side (Splats.h); 0: none. */
+    int splatSpacing = 0;
 };
 
 /** Sources no larger than this are simplified (meshopt's memory is ~100 bytes a triangle). */
@@ -67,6 +86,19 @@ inline constexpr double kStandInTargetShare = 0.25;
         float baseError,
         const storage::PositionGrid& grid);
 
+/** Appends `standIn`'s clusters to `out`: its splats' point clusters, then its triangles'. */
+[[nodiscard]] Result<ClusterBuildStats> encodeStandIn(
+        ClusterEncoder& encoder,
+        const StandIn& standIn,
+        const storage::PositionGrid& grid,
+        std::vector<std::byte>& out);
+
+/** The representation kind a stand-in is stored as (FORMAT.md §5.3). */
+constexpr storage::RepresentationKind representationKindOf(StandInKind kind) noexcept {
+    return kind == StandInKind::Splats ? storage::RepresentationKind::Splats
+                                       : storage::RepresentationKind::Clusters;
+}
+
 /** What became of the cells that could have had a stand-in (the build report's "why"). */
 struct StandInCounts {
     std::uint64_t kept = 0;
@@ -75,7 +107,13 @@ struct StandInCounts {
     std::uint64_t tooLarge = 0;    ///< sources over kMaxStandInSource or stand-ins over
                                    ///< StandInLimits::maxTriangles, or above an instance or a
                                    ///< chunk whose source was not handed up
+    std::uint64_t splats = 0;      ///< of `kept`, cells that keep splats (no simplification paid)
+    std::uint64_t splatsNotReducing = 0; ///< splat sets over kMaxSplatShare: not kept
+    std::uint64_t splatsTooLarge = 0;    ///< splat sets over kMaxSplatBins candidate bins or a page limit
     StandInCounts& operator+=(const StandInCounts& other) noexcept {
+        splats += other.splats;
+        splatsNotReducing += other.splatsNotReducing;
+        splatsTooLarge += other.splatsTooLarge;
         kept += other.kept;
         notReducing += other.notReducing;
         tooSmall += other.tooSmall;
@@ -99,8 +137,9 @@ struct StandInLimits {
 std::size_t maxStandInTriangles(std::uint32_t pageSize) noexcept;
 
 /**
- * Stand-ins of a hierarchy (nodes[0] the root, children after their parents): one entry per
- * node, set where a stand-in was kept. `placed` gives the sources of nodes whose subtrees were
+ * Stand-ins of a hierarchy (nodes[0] the root, children after their parents) of the `kinds`
+ * asked for: one entry per node, set where a stand-in was kept. A cell's splats are made from
+ * the source it would simplify (the parent's source is that source, not the splats). `placed` gives the sources of nodes whose subtrees were
  * built elsewhere (a chunk's root, by node index; absent: no source). `rootSource` gets the
  * root's source for a tree above; `counts` what became of each cell. Deterministic whatever
  * `threads`.
@@ -117,6 +156,7 @@ struct PlacedSource {
         unsigned threads,
         StandInSource* rootSource,
         StandInCounts& counts,
-        const StandInLimits& limits = {});
+        const StandInLimits& limits = {},
+        const StandInKinds& kinds = {});
 
 } // namespace ff::builder

@@ -171,6 +171,7 @@ Result<SubtreeV2Result> writeSubtreeV2(
         std::vector<EncodedPayload> encoded(tree.order.size());
         std::vector<EncodedPayload> encodedStandIns(tree.order.size());
         std::vector<float> standInError(tree.order.size(), 0.0f);
+        std::vector<storage::RepresentationKind> standInKind(tree.order.size());
         if (hasGeometry) {
             std::vector<std::span<const storage::PackedTriangle>> runs(tree.order.size());
             for (std::size_t i = 0; i < tree.order.size(); ++i) {
@@ -179,7 +180,7 @@ Result<SubtreeV2Result> writeSubtreeV2(
                     runs[i] = triangles.subspan(node.firstTriangle, node.triangleCount);
             }
             FF_RETURN_IF_ERROR(encodePayloads(runs, *input.grid, input.threads, encoded));
-            if (input.standIns) {
+            if (input.standIns.simplified || input.standIns.splatSpacing > 0) {
                 std::vector<PlacedSource> sources;
                 for (const PlacedNodeV2& p : input.placed)
                     if (p.standInSource.usable)
@@ -194,14 +195,25 @@ Result<SubtreeV2Result> writeSubtreeV2(
                                 input.threads,
                                 nullptr,
                                 result.standInCounts,
-                                {maxStandInTriangles(writer.pageSize()), true}));
-                for (std::size_t i = 0; i < tree.order.size(); ++i) {
-                    const std::optional<StandIn>& standIn = standIns[tree.order[i]];
-                    runs[i] = standIn ? std::span<const storage::PackedTriangle>(standIn->triangles)
-                                      : std::span<const storage::PackedTriangle>();
-                    standInError[i] = standIn ? standIn->error : 0.0f;
-                }
-                FF_RETURN_IF_ERROR(encodePayloads(runs, *input.grid, input.threads, encodedStandIns));
+                                {maxStandInTriangles(writer.pageSize()), true},
+                                input.standIns));
+                std::vector<std::size_t> work;
+                for (std::size_t i = 0; i < tree.order.size(); ++i)
+                    if (const std::optional<StandIn>& standIn = standIns[tree.order[i]]) {
+                        work.push_back(i);
+                        standInError[i] = standIn->error;
+                        standInKind[i] = representationKindOf(standIn->kind);
+                    }
+                FF_RETURN_IF_ERROR(parallelFor(work.size(), input.threads, [&] {
+                    return [&, encoder = ClusterEncoder()](std::size_t k) mutable -> Status {
+                        const std::size_t i = work[k];
+                        EncodedPayload& payload = encodedStandIns[i];
+                        FF_ASSIGN_OR_RETURN(
+                                payload.stats,
+                                encodeStandIn(encoder, *standIns[tree.order[i]], *input.grid, payload.bytes));
+                        return Status::ok();
+                    };
+                }));
             }
         }
         ClusterPagePacker packer(writer, input.prototype);
@@ -237,6 +249,7 @@ Result<SubtreeV2Result> writeSubtreeV2(
                         standIn.bytes,
                         static_cast<std::uint32_t>(standIn.stats.clusters),
                         standInError[i],
+                        standInKind[i],
                         reps));
                 local.resize(reps.size(), true);
                 encodedStandIns[i] = EncodedPayload{};

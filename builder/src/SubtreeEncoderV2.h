@@ -82,8 +82,8 @@ struct SubtreeV2Input {
     std::span<const PlacedNodeV2> placed;
     /** Threads that cluster the nodes' triangles (the bytes do not depend on it). */
     unsigned threads = 1;
-    /** Give cells simplified stand-ins of their subtrees (StandIns.h; needs a grid). */
-    bool standIns = false;
+    /** The stand-ins cells get for their subtrees (StandIns.h; needs a grid): none by default. */
+    StandInKinds standIns{false, 0};
 };
 
 struct SubtreeV2Result {

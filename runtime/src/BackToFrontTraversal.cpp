@@ -130,6 +130,7 @@ void BackToFrontTraversal::flushIfFull() {
 Status BackToFrontTraversal::flush() {
     mStats->geometryDraws += detail::mergeGeometryDraws(mList.geometry);
     mList.cubesAsPoints = detail::drawsCubesAsPoints(mFrame->selection);
+    mList.splats = mFrame->selection.splats;
     if (mSinkStatus.isOk())
         mSinkStatus = mServices->sink.draw(mList, *mStats);
     mList.clear();
@@ -196,7 +197,7 @@ void BackToFrontTraversal::visit(
     // A stand-in accurate enough here is drawn instead of the whole subtree. Else refining
     // needs the cell's own triangles and its children's page; without either, the cell's cube
     // stands in for the whole subtree this frame.
-    bool standIn = false;
+    detail::Payload drawn = detail::Payload::Own;
     const bool geometryReady =
             mNodePages->collectPayload(
                     node,
@@ -210,7 +211,8 @@ void BackToFrontTraversal::visit(
                     priority,
                     mServices->uploads,
                     mRuns,
-                    standIn) == Fetch::Ready;
+                    drawn) == Fetch::Ready;
+    const bool standIn = drawn != detail::Payload::Own;
     std::span<const std::byte> childPage;
     const bool childrenReady =
             standIn || node.childCount == 0 ||
@@ -220,7 +222,7 @@ void BackToFrontTraversal::visit(
         return;
     }
     if (standIn) {
-        ++mStats->standInsDrawn;
+        ++(drawn == detail::Payload::Splats ? mStats->splatSetsDrawn : mStats->standInsDrawn);
         for (const detail::PayloadRun& run : mRuns)
             emitGeometry(run, active);
         return;
@@ -257,6 +259,7 @@ void BackToFrontTraversal::visit(
 
 void BackToFrontTraversal::emitGeometry(const detail::PayloadRun& run, std::size_t active) {
     mStats->trianglesDrawn += run.triangles;
+    mStats->splatsDrawn += run.points;
     if (mPass == Pass::CubesOnly)
         return;
     mList.geometry.push_back(

@@ -16,6 +16,8 @@ std::string FrameStats::toJson() const {
             {"cube_faces_per_level", cubeFacesPerLevel},
             {"triangles_drawn", trianglesDrawn},
             {"stand_ins_drawn", standInsDrawn},
+            {"splat_sets_drawn", splatSetsDrawn},
+            {"splats_drawn", splatsDrawn},
             {"geometry_draws", geometryDraws},
             {"pages_uploaded", pagesUploaded},
             {"nodes_deferred", nodesDeferred},

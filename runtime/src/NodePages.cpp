@@ -132,6 +132,28 @@ std::size_t mergeGeometryDraws(std::vector<GeometryDraw>& draws) {
     return out;
 }
 
+namespace {
+
+/** A representation forced over the cube (`--representation simplified|splats`). */
+bool forcesStandIns(Representation representation) noexcept {
+    return representation == Representation::Simplified || representation == Representation::Splats;
+}
+
+/** Whether `r` is the payload `payload` names. */
+bool holds(const storage::RepresentationRecord& r, Payload payload) noexcept {
+    switch (payload) {
+    case Payload::Own:
+        return r.kind == storage::RepresentationKind::Clusters && !storage::isStandIn(r);
+    case Payload::Simplified:
+        return r.kind == storage::RepresentationKind::Clusters && storage::isStandIn(r);
+    case Payload::Splats:
+        return r.kind == storage::RepresentationKind::Splats;
+    }
+    return false;
+}
+
+} // namespace
+
 Verdict classify(
         const storage::NodeRecord& node,
         const NodeFrame& where,
@@ -148,11 +170,11 @@ Verdict classify(
     projected = projectedPixels(node, where.localEye, where.metric, camera, pixelScale);
     if (!drawnAsCube(node, projected, options))
         return Verdict::Refine;
-    // `--representation simplified`: a cell with payloads of its own is refined instead, and
-    // its stand-in, if it has one, drawn where auto would draw the cube (standInView).
+    // `--representation simplified|splats`: a cell with payloads of its own is refined
+    // instead, and its stand-in of that kind, if it has one, drawn where auto would draw the
+    // cube (standInView).
     const bool mayHaveStandIn = isCell(node) && node.geometryCount > 0;
-    return options.representation == Representation::Simplified && mayHaveStandIn ? Verdict::Refine
-                                                                                   : Verdict::Cube;
+    return forcesStandIns(options.representation) && mayHaveStandIn ? Verdict::Refine : Verdict::Cube;
 }
 
 StandInView standInView(
@@ -164,9 +186,11 @@ StandInView standInView(
         float projected) {
     StandInView view;
     view.allowed = options.representation != Representation::Cube && options.epsilonPixels > 0.0f;
-    view.forced = options.representation == Representation::Simplified &&
-                  projected < options.epsilonPixels && (node.flags & storage::kNodeHasCube);
+    view.representation = options.representation;
+    view.forced = forcesStandIns(options.representation) && projected < options.epsilonPixels &&
+                  (node.flags & storage::kNodeHasCube);
     view.epsilonPixels = options.epsilonPixels;
+    view.splatPixels = options.splats.pixels;
     float perUnit = pixelScale * where.metric.maxStretch();
     if (!camera.orthographic) {
         const float nearest =
@@ -364,26 +388,29 @@ Fetch NodePages::collectPayload(
         float priority,
         IUploadGate& uploads,
         std::vector<PayloadRun>& out,
-        bool& standIn) {
-    standIn = false;
+        Payload& drawn) {
+    drawn = Payload::Own;
     if (mV2 && view.allowed && isCell(node) && node.geometryCount > 0) {
         if (readRepresentations(node, priority) != Fetch::Ready) {
             out.clear();
             return Fetch::Missing;
         }
-        const auto found = std::find_if(
-                mRepresentations.begin(), mRepresentations.end(), storage::isStandIn);
         out.clear();
-        if (found != mRepresentations.end() && view.accepts(found->parameter)) {
-            if (admit(runsOf(priority, out, true), uploads, out) == Fetch::Ready) {
-                standIn = true;
+        for (const Payload kind : {Payload::Simplified, Payload::Splats}) {
+            const auto found = std::find_if(
+                    mRepresentations.begin(), mRepresentations.end(),
+                    [kind](const storage::RepresentationRecord& r) { return holds(r, kind); });
+            if (found == mRepresentations.end() || !view.accepts(kind, found->parameter))
+                continue;
+            if (admit(runsOf(priority, out, kind), uploads, out) == Fetch::Ready) {
+                drawn = kind;
                 return Fetch::Ready;
             }
             // Asked for; until it is resident (or if its page failed) the cell is refined as
             // without it, so what was drawn finer does not turn into a cube meanwhile.
             out.clear();
         }
-        return admit(runsOf(priority, out, false), uploads, out); // the table read once
+        return admit(runsOf(priority, out, Payload::Own), uploads, out); // the table read once
     }
     return collectGeometry(node, priority, uploads, out);
 }
@@ -407,7 +434,7 @@ Fetch NodePages::payloadRuns(
     if (node.geometryCount == 0 || !isCell(node))
         return Fetch::Ready;
     if (mV2)
-        return clusterRuns(node, priority, out, false);
+        return clusterRuns(node, priority, out, Payload::Own);
     mRuns.clear();
     if (Status status = mScene.geometrySegments(node, mRuns); !status) {
         reportFailure(status);
@@ -446,16 +473,16 @@ Fetch NodePages::readRepresentations(const storage::NodeRecord& node, float prio
 // in cluster pages as the cache keeps them (CachedClusterPage). Kinds this build does not draw are
 // passed over, so a file with a later issue's kinds still draws its clusters.
 Fetch NodePages::clusterRuns(
-        const storage::NodeRecord& node, float priority, std::vector<PayloadRun>& out, bool standIn) {
+        const storage::NodeRecord& node, float priority, std::vector<PayloadRun>& out, Payload which) {
     if (readRepresentations(node, priority) != Fetch::Ready)
         return Fetch::Missing;
-    return runsOf(priority, out, standIn);
+    return runsOf(priority, out, which);
 }
 
-Fetch NodePages::runsOf(float priority, std::vector<PayloadRun>& out, bool standIn) {
+Fetch NodePages::runsOf(float priority, std::vector<PayloadRun>& out, Payload which) {
     Fetch result = Fetch::Ready;
     for (const storage::RepresentationRecord& r : mRepresentations) {
-        if (r.kind != storage::RepresentationKind::Clusters || storage::isStandIn(r) != standIn)
+        if (!holds(r, which))
             continue;
         std::span<const std::byte> payload;
         if (fetch(r.page, storage::PageType::Geometry, priority, payload) != Fetch::Ready) {
@@ -471,9 +498,12 @@ Fetch NodePages::runsOf(float priority, std::vector<PayloadRun>& out, bool stand
             continue;
         }
         std::uint32_t triangles = 0;
-        for (const storage::IndexedCluster& cluster : page->clusters(run->first, run->count))
+        std::uint32_t points = 0;
+        for (const storage::IndexedCluster& cluster : page->clusters(run->first, run->count)) {
             triangles += cluster.info.triangleCount;
-        out.push_back({r.page, payload.data(), run->first, run->count, triangles, bytesOf(payload)});
+            points += cluster.info.points() ? cluster.info.vertexCount : 0;
+        }
+        out.push_back({r.page, payload.data(), run->first, run->count, triangles, bytesOf(payload), points});
     }
     return result;
 }

@@ -65,20 +65,40 @@ std::uint32_t cubeFacesToward(
         const glm::vec3& localEye,
         std::uint8_t leastAlpha);
 
+/** Which of a cell's payloads a walk draws. */
+enum class Payload : std::uint8_t {
+    Own,        ///< its own triangles (and its children, drawn apart)
+    Simplified, ///< its simplified stand-in, instead of its whole subtree
+    Splats,     ///< its splats, instead of its whole subtree
+};
+
 /**
- * Whether a cell the ε rule refines may be drawn as its stand-in (a simplified copy of its
- * subtree, builder/src/StandIns.h) instead: when the stand-in's error, in the cell's units, is
- * less than ε pixels at the cell's nearest point (times the instance's largest stretch), or
- * always where `--representation simplified` forces it over the cube.
+ * Whether a cell the ε rule refines may be drawn as a stand-in (a simplified copy of its
+ * subtree, builder/src/StandIns.h, or splats, builder/src/Splats.h) instead: when the
+ * stand-in's error, in the cell's units, is less than ε pixels at the cell's nearest point
+ * (times the instance's largest stretch), and for splats when their diameter on screen is at
+ * least twice that (no holes); or always where `--representation simplified|splats` forces that
+ * kind over the cube.
  */
 struct StandInView {
     bool allowed = false;      ///< `--representation cube` draws none
-    bool forced = false;       ///< simplified, where auto would draw the cube
+    bool forced = false;       ///< simplified or splats, where auto would draw the cube
+    Representation representation = Representation::Auto;
     float pixelsPerUnit = 0.0f; ///< at the cell's nearest point; infinite with the eye inside
     float epsilonPixels = 0.0f;
+    float splatPixels = 0.0f; ///< the splats' diameter on screen
 
-    [[nodiscard]] bool accepts(float error) const noexcept {
-        return allowed && (forced || error * pixelsPerUnit < epsilonPixels);
+    [[nodiscard]] bool accepts(Payload kind, float error) const noexcept {
+        if (!allowed || kind == Payload::Own)
+            return false;
+        const bool splats = kind == Payload::Splats;
+        if ((representation == Representation::Simplified && splats) ||
+            (representation == Representation::Splats && !splats))
+            return false;
+        if (forced)
+            return true;
+        const float onScreen = error * pixelsPerUnit;
+        return onScreen < epsilonPixels && (!splats || 2.0f * onScreen <= splatPixels);
     }
 };
 
@@ -134,6 +154,7 @@ struct PayloadRun {
     std::uint32_t count;
     std::uint32_t triangles;
     std::uint32_t payloadBytes;
+    std::uint32_t points = 0; ///< splats among the items (point clusters' vertices)
 };
 
 enum class Fetch { Ready, Missing };
@@ -185,16 +206,17 @@ public:
             float priority,
             IUploadGate& uploads,
             std::vector<PayloadRun>& out);
-    /** What a refined cell draws: its stand-in's runs if it has one `view` accepts and they
-     *  are all resident and admitted (`standIn` set: draw them instead of its own payload and
-     *  children), else collectGeometry()'s (the stand-in's pages stay asked for). */
+    /** What a refined cell draws: the runs of the first of its stand-ins (simplified, then
+     *  splats) that `view` accepts and whose pages are all resident and admitted (`drawn` says
+     *  which: draw them instead of its own payload and children), else collectGeometry()'s
+     *  (`drawn` Own; the stand-in's pages stay asked for). */
     Fetch collectPayload(
             const storage::NodeRecord& node,
             const StandInView& view,
             float priority,
             IUploadGate& uploads,
             std::vector<PayloadRun>& out,
-            bool& standIn);
+            Payload& drawn);
     /** collectGeometry() without an upload gate, appending to `out`. */
     Fetch payloadRuns(const storage::NodeRecord& node, float priority, std::vector<PayloadRun>& out);
 
@@ -219,11 +241,11 @@ private:
             std::uint8_t level) const;
     /** A format 2 cell's representations into mRepresentations (its own page fetched). */
     Fetch readRepresentations(const storage::NodeRecord& node, float priority);
-    /** The runs of its own clusters, or of its stand-in's (`standIn`). */
+    /** The runs of its own clusters, or of a stand-in's. */
     Fetch clusterRuns(
-            const storage::NodeRecord& node, float priority, std::vector<PayloadRun>& out, bool standIn);
-    /** The runs of mRepresentations (as readRepresentations() left them): own or stand-in. */
-    Fetch runsOf(float priority, std::vector<PayloadRun>& out, bool standIn);
+            const storage::NodeRecord& node, float priority, std::vector<PayloadRun>& out, Payload which);
+    /** The runs of mRepresentations (as readRepresentations() left them) of `which`. */
+    Fetch runsOf(float priority, std::vector<PayloadRun>& out, Payload which);
     /** Drops the runs `uploads` refuses (counted; Missing then). */
     Fetch admit(Fetch result, IUploadGate& uploads, std::vector<PayloadRun>& out);
 

@@ -369,6 +369,7 @@ Status OcclusionTraversal::Impl::traverse(
     sinkStatus = Status::ok();
     list.clear();
     list.cubesAsPoints = detail::drawsCubesAsPoints(frame->selection);
+    list.splats = frame->selection.splats;
     list.cubesOcclude = true;
     transforms.clear();
     queue.clear();
@@ -878,6 +879,7 @@ void OcclusionTraversal::Impl::drawRuns(std::uint32_t transform) {
     const std::uint32_t index = listIndex(transform);
     for (const detail::PayloadRun& run : runs) {
         stats->trianglesDrawn += run.triangles;
+        stats->splatsDrawn += run.points;
         list.geometry.push_back(
                 {run.page, run.payload, run.first, run.count, index, run.triangles, run.payloadBytes});
     }
@@ -891,7 +893,7 @@ OcclusionTraversal::Impl::Expanded OcclusionTraversal::Impl::expandCell(
     // A stand-in accurate enough here is drawn instead of the whole subtree (as back to front).
     const Transform& t = transforms[transform];
     const float projected = detail::projectedPixels(node, t.localEye, t.metric, frame->camera, pixelScale);
-    bool standIn = false;
+    detail::Payload drawn = detail::Payload::Own;
     const bool geometryReady =
             nodePages.collectPayload(
                     node,
@@ -905,7 +907,8 @@ OcclusionTraversal::Impl::Expanded OcclusionTraversal::Impl::expandCell(
                     priority,
                     services->uploads,
                     runs,
-                    standIn) == Fetch::Ready;
+                    drawn) == Fetch::Ready;
+    const bool standIn = drawn != detail::Payload::Own;
     std::span<const std::byte> childPage;
     const bool childrenReady = standIn || node.childCount == 0 ||
                                nodePages.childPage(node, priority, childPage) == Fetch::Ready;
@@ -914,7 +917,7 @@ OcclusionTraversal::Impl::Expanded OcclusionTraversal::Impl::expandCell(
         return Expanded::Deferred;
     }
     if (standIn) {
-        ++stats->standInsDrawn;
+        ++(drawn == detail::Payload::Splats ? stats->splatSetsDrawn : stats->standInsDrawn);
         drawRuns(transform);
         return Expanded::DrewGeometry;
     }

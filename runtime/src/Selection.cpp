@@ -19,10 +19,11 @@ constexpr std::array<std::pair<CubeStyle, const char*>, 3> kCubeStyles = {{
         {CubeStyle::Faces, "faces"},
         {CubeStyle::AreaWeightedPoints, "points"},
 }};
-constexpr std::array<std::pair<Representation, const char*>, 3> kRepresentations = {{
+constexpr std::array<std::pair<Representation, const char*>, 4> kRepresentations = {{
         {Representation::Auto, "auto"},
         {Representation::Cube, "cube"},
         {Representation::Simplified, "simplified"},
+        {Representation::Splats, "splats"},
 }};
 constexpr std::array<std::pair<OcclusionBackend, const char*>, 2> kOcclusionBackends = {{
         {OcclusionBackend::Queries, "queries"},

@@ -526,6 +526,7 @@ public:
         mScratch.localEyes = batch.localEyes;
         mScratch.cubesAsPoints = batch.cubesAsPoints;
         mScratch.cubesOcclude = batch.cubesOcclude;
+        mScratch.splats = batch.splats;
         // Each run cut to the stretches of its items (triangles, or clusters with a triangle
         // that shows) that show (the walk counted them all).
         mScratch.geometry.clear();

@@ -26,6 +26,9 @@ struct ClusterHeader {
 static_assert(sizeof(ClusterHeader) == 20);
 
 inline constexpr std::uint8_t kClusterWidePositions = 1u << 0;
+/** A point cluster (splats): no triangles and no index stream. */
+inline constexpr std::uint8_t kClusterPoints = 1u << 1;
+inline constexpr std::uint8_t kKnownClusterFlags = kClusterWidePositions | kClusterPoints;
 
 // Vertices as the vertex codec sees them. Sizes are multiples of 4, as the codec requires;
 // the padding is zero, which the codec stores in next to nothing.
@@ -213,7 +216,7 @@ std::array<std::int16_t, 2> roundNormalTo12Bits(std::array<std::int16_t, 2> oct)
 std::size_t encodedClusterBound(std::size_t vertexCount, std::size_t triangleCount) noexcept {
     return sizeof(ClusterHeader) +
            meshopt_encodeVertexBufferBound(vertexCount, sizeof(WideVertex)) +
-           meshopt_encodeIndexBufferBound(triangleCount * 3, vertexCount);
+           (triangleCount == 0 ? 0 : meshopt_encodeIndexBufferBound(triangleCount * 3, vertexCount));
 }
 
 Result<std::size_t> encodeCluster(
@@ -224,11 +227,12 @@ Result<std::size_t> encodeCluster(
         return Status(
                 ErrorCode::InvalidArgument,
                 "a cluster holds 1-255 vertices, not " + std::to_string(vertices.size()));
-    if (indices.empty() || indices.size() % 3 != 0 || indices.size() / 3 > kMaxClusterTriangles)
+    if (indices.size() % 3 != 0 || indices.size() / 3 > kMaxClusterTriangles)
         return Status(
                 ErrorCode::InvalidArgument,
-                "a cluster holds 1-512 triangles, 3 indices each, not " +
+                "a cluster holds 0-512 triangles, 3 indices each, not " +
                         std::to_string(indices.size()) + " indices");
+    const bool points = indices.empty();
     if (out.size() < encodedClusterBound(vertices.size(), indices.size() / 3))
         return Status(
                 ErrorCode::InvalidArgument, "cluster output smaller than encodedClusterBound()");
@@ -252,7 +256,7 @@ Result<std::size_t> encodeCluster(
 
     ClusterHeader header{};
     header.vertexCount = static_cast<std::uint8_t>(vertices.size());
-    header.flags = wide ? kClusterWidePositions : 0;
+    header.flags = static_cast<std::uint8_t>((wide ? kClusterWidePositions : 0) | (points ? kClusterPoints : 0));
     header.triangleCount = static_cast<std::uint16_t>(indices.size() / 3);
     header.base = wide ? std::array<std::uint32_t, 3>{0, 0, 0} : lo;
 
@@ -283,12 +287,14 @@ Result<std::size_t> encodeCluster(
         vertexBytes = meshopt_encodeVertexBuffer(
                 streams, room, packed.data(), vertices.size(), sizeof(NarrowVertex));
     }
-    const std::size_t indexBytes = meshopt_encodeIndexBuffer(
-            streams + vertexBytes, room - vertexBytes, wideIndices.data(), indices.size());
-    if (vertexBytes == 0 || indexBytes == 0 || vertexBytes > 0xffff || indexBytes > 0xffff)
+    const std::size_t indexBytes =
+            points ? 0
+                   : meshopt_encodeIndexBuffer(
+                             streams + vertexBytes, room - vertexBytes, wideIndices.data(), indices.size());
+    if (vertexBytes == 0 || (indexBytes == 0 && !points) || vertexBytes > 0xffff || indexBytes > 0xffff)
         return Status(
                 ErrorCode::Internal, "meshoptimizer could not encode a cluster within its bound");
-    FF_ASSERT(streams[0] == kVertexStreamHeader && streams[vertexBytes] == kIndexStreamHeader);
+    FF_ASSERT(streams[0] == kVertexStreamHeader && (points || streams[vertexBytes] == kIndexStreamHeader));
     header.vertexStreamBytes = static_cast<std::uint16_t>(vertexBytes);
     header.indexStreamBytes = static_cast<std::uint16_t>(indexBytes);
     std::memcpy(out.data(), &header, sizeof header);
@@ -304,20 +310,24 @@ Result<ClusterHeader> readHeader(std::span<const std::byte> bytes) {
     std::memcpy(&h, bytes.data(), sizeof h);
     if (h.vertexCount == 0)
         return corrupt("no vertices");
-    if (h.triangleCount == 0 || h.triangleCount > kMaxClusterTriangles)
-        return corrupt(std::to_string(h.triangleCount) + " triangles (1-512)");
-    if ((h.flags & ~kClusterWidePositions) != 0)
+    if ((h.flags & ~kKnownClusterFlags) != 0)
         return corrupt("unknown flags " + std::to_string(h.flags));
+    const bool points = (h.flags & kClusterPoints) != 0;
+    if (points ? h.triangleCount != 0 || h.indexStreamBytes != 0
+               : h.triangleCount == 0 || h.triangleCount > kMaxClusterTriangles)
+        return corrupt(
+                std::to_string(h.triangleCount) + " triangles (" +
+                (points ? "a point cluster has none and no index stream)" : "1-512)"));
     const std::size_t total =
             sizeof(ClusterHeader) + std::size_t{h.vertexStreamBytes} + h.indexStreamBytes;
-    if (h.vertexStreamBytes == 0 || h.indexStreamBytes == 0 || total > bytes.size())
+    if (h.vertexStreamBytes == 0 || (h.indexStreamBytes == 0 && !points) || total > bytes.size())
         return corrupt(
                 "streams of " + std::to_string(h.vertexStreamBytes) + " + " +
                 std::to_string(h.indexStreamBytes) + " bytes past the " +
                 std::to_string(bytes.size()) + " there are");
     const auto* streams =
             reinterpret_cast<const unsigned char*>(bytes.data() + sizeof(ClusterHeader));
-    if (streams[0] != kVertexStreamHeader || streams[h.vertexStreamBytes] != kIndexStreamHeader)
+    if (streams[0] != kVertexStreamHeader || (!points && streams[h.vertexStreamBytes] != kIndexStreamHeader))
         return corrupt("codec versions other than vertex 0 and index 1");
     for (std::size_t a = 0; a < 3; ++a)
         if (h.base[a] >= (1u << kMaxPositionGridBits))
@@ -390,6 +400,8 @@ Status decodeCluster(
                     ? decodeVertices<WideVertex>(h, streams, grid, vertices)
                     : decodeVertices<NarrowVertex>(h, streams, grid, vertices);
     FF_RETURN_IF_ERROR(decodedVertices);
+    if (h.triangleCount == 0)
+        return Status::ok(); // a point cluster: vertices only
     std::array<std::uint16_t, kMaxClusterTriangles * 3> decoded;
     const std::size_t indexCount = std::size_t{h.triangleCount} * 3;
     if (meshopt_decodeIndexBuffer(

@@ -38,8 +38,14 @@ public:
         : mIndex(index)
         , mSource(source) {}
 
+    /** What a run of clusters holds. */
+    struct RunCounts {
+        std::uint64_t triangles = 0;
+        std::uint64_t points = 0; ///< vertices of point clusters (splats)
+    };
+
     /** The run `r` names, checked: a cluster page of `prototype`, whole clusters. */
-    Result<std::uint64_t> trianglesOf(const RepresentationRecord& r, std::uint32_t prototype) {
+    Result<RunCounts> countsOf(const RepresentationRecord& r, std::uint32_t prototype) {
         if (r.page == 0 || r.page >= mIndex.pageCount())
             return corrupt(r.page, "a representation names a page outside the file");
         auto found = mPages.find(r.page);
@@ -63,11 +69,14 @@ public:
         Result<ClusterRun> run = findClusterRun(page.clusters, r.offset, r.length, r.count);
         if (!run)
             return corrupt(r.page, run.status().message());
-        std::uint64_t triangles = 0;
-        for (std::uint32_t c = 0; c < run->count; ++c)
-            triangles += page.clusters[run->first + c].info.triangleCount;
+        RunCounts counts;
+        for (std::uint32_t c = 0; c < run->count; ++c) {
+            const ClusterInfo& info = page.clusters[run->first + c].info;
+            counts.triangles += info.triangleCount;
+            counts.points += info.points() ? info.vertexCount : 0;
+        }
         clusters += run->count;
-        return triangles;
+        return counts;
     }
 
     std::uint64_t clusters = 0;
@@ -174,21 +183,32 @@ Result<HierarchySummary> checkHierarchyV2(
             FF_RETURN_IF_ERROR(readRepresentationsV2(payload, where.page, node, representations));
             if (!representations.empty() && at.prototype == kInstanceLevel)
                 return corrupt(where.page, slot + "the instance level holds no payloads");
-            if (std::any_of(representations.begin(), representations.end(), isStandIn))
-                ++summary.standIns;
+            bool simplifiedSeen = false; // a stand-in spanning pages is a representation a page
+            bool splatsSeen = false;
             for (const RepresentationRecord& r : representations) {
-                if (r.kind != RepresentationKind::Clusters)
+                const bool splats = r.kind == RepresentationKind::Splats;
+                if (r.kind != RepresentationKind::Clusters && !splats)
                     return corrupt(
                             where.page, slot + "a payload kind this version does not define");
                 FF_ASSIGN_OR_RETURN(
-                        const std::uint64_t triangles,
-                        clusterPages.trianglesOf(r, static_cast<std::uint32_t>(at.prototype)));
+                        const auto counts,
+                        clusterPages.countsOf(r, static_cast<std::uint32_t>(at.prototype)));
+                if (!splats && counts.points > 0)
+                    return corrupt(where.page, slot + "point clusters in a payload of triangles");
                 ++summary.representations;
-                if (isStandIn(r)) { // a simplified copy of what is below: not stored triangles
-                    summary.standInTriangles += triangles;
-                    continue;
+                // A stand-in is a copy of what is below: not stored triangles.
+                if (splats) {
+                    summary.splatSets += splatsSeen ? 0 : 1;
+                    splatsSeen = true;
+                    summary.splats += counts.points;
+                    summary.splatTriangles += counts.triangles;
+                } else if (isStandIn(r)) {
+                    summary.standIns += simplifiedSeen ? 0 : 1;
+                    simplifiedSeen = true;
+                    summary.standInTriangles += counts.triangles;
+                } else {
+                    trianglesOf[static_cast<std::size_t>(at.prototype)] += counts.triangles;
                 }
-                trianglesOf[static_cast<std::size_t>(at.prototype)] += triangles;
             }
         }
         if (node.childCount > 0) {

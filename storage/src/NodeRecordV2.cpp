@@ -172,6 +172,19 @@ Result<NodeV2> decodeNodeV2(std::span<const std::byte> bytes, const NodeBox& par
     return node;
 }
 
+namespace {
+
+/** A stand-in is clusters (simplified) or splats, with an error >= 0; splats are only ever a
+ *  subtree's stand-in (a kind's other uses are not defined yet). */
+bool standInRuleHolds(RepresentationKind kind, std::uint8_t flags, float parameter) noexcept {
+    const bool standIn = (flags & kRepresentationStandIn) != 0;
+    if (kind == RepresentationKind::Splats)
+        return standIn && parameter >= 0.0f;
+    return !standIn || (kind == RepresentationKind::Clusters && parameter >= 0.0f);
+}
+
+} // namespace
+
 Status encodeRepresentation(const RepresentationRecord& r, std::span<std::byte> out) {
     if (out.size() < kRepresentationRecordSize)
         return Status(ErrorCode::InvalidArgument, "a representation record needs 20 bytes");
@@ -180,9 +193,11 @@ Status encodeRepresentation(const RepresentationRecord& r, std::span<std::byte> 
         return Status(
                 ErrorCode::InvalidArgument,
                 "unknown representation kind or flags, or a non-finite parameter");
-    if (isStandIn(r) && (r.kind != RepresentationKind::Clusters || r.parameter < 0.0f))
+    if (!standInRuleHolds(r.kind, r.flags, r.parameter))
         return Status(
-                ErrorCode::InvalidArgument, "a stand-in is clusters with an error of at least 0");
+                ErrorCode::InvalidArgument,
+                "a stand-in is clusters or splats with an error of at least 0, and splats are "
+                "always a stand-in");
     const PackedRepresentation p{
             static_cast<std::uint8_t>(r.kind),
             r.flags,
@@ -214,11 +229,11 @@ Result<RepresentationRecord> decodeRepresentation(std::span<const std::byte> byt
                 "representation record: unknown flags " + std::to_string(p.flags));
     if (!std::isfinite(p.parameter))
         return Status(ErrorCode::Corrupt, "representation record: non-finite parameter");
-    if ((p.flags & kRepresentationStandIn) != 0 &&
-        (p.kind != static_cast<std::uint8_t>(RepresentationKind::Clusters) || p.parameter < 0.0f))
+    if (!standInRuleHolds(static_cast<RepresentationKind>(p.kind), p.flags, p.parameter))
         return Status(
                 ErrorCode::Corrupt,
-                "representation record: a stand-in that is not clusters or has a negative error");
+                "representation record: a stand-in that is not clusters or splats or has a "
+                "negative error, or splats that are not a stand-in");
     return RepresentationRecord{
             static_cast<RepresentationKind>(p.kind),
             p.flags,

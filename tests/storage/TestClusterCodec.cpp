@@ -212,7 +212,7 @@ TEST(ClusterCodecTest, TheEncoderRefusesClustersOutsideItsLimits) {
     std::vector<std::byte> out(1 << 16);
     const Patch p = makePatch(4, 4, 1, {0, 0, 0}, 7);
     EXPECT_FALSE(encodeCluster({}, p.indices, out).isOk());
-    EXPECT_FALSE(encodeCluster(p.vertices, {}, out).isOk());
+    EXPECT_FALSE(encodeCluster({}, {}, out).isOk()); // no points either
     std::vector<std::uint8_t> badIndex = p.indices;
     badIndex[4] = 16;
     EXPECT_FALSE(encodeCluster(p.vertices, badIndex, out).isOk());
@@ -225,6 +225,46 @@ TEST(ClusterCodecTest, TheEncoderRefusesClustersOutsideItsLimits) {
     EXPECT_FALSE(encodeCluster(p.vertices, p.indices, small).isOk());
     const Patch tooMany = makePatch(16, 16, 1, {0, 0, 0}, 8); // 256 vertices
     EXPECT_FALSE(encodeCluster(tooMany.vertices, std::span(tooMany.indices).first(3), out).isOk());
+}
+
+// Splats: a cluster of vertices alone, no index stream, flagged so (FORMAT.md §6.3).
+TEST(ClusterCodecTest, APointClusterRoundTripsWithoutAnIndexStream) {
+    const Patch p = makePatch(15, 17, 53, {1000, 2000, 3000}, 21); // 255 vertices, the most
+    std::vector<std::byte> bytes(encodedClusterBound(p.vertices.size(), 0));
+    const auto written = encodeCluster(p.vertices, {}, bytes);
+    ASSERT_TRUE(written.isOk()) << written.status().toString();
+    bytes.resize(*written);
+    const auto info = readClusterInfo(bytes);
+    ASSERT_TRUE(info.isOk()) << info.status().toString();
+    EXPECT_TRUE(info->points());
+    EXPECT_EQ(info->vertexCount, 255u);
+    EXPECT_EQ(info->triangleCount, 0u);
+    EXPECT_EQ(info->encodedBytes, bytes.size());
+    expectDecodesTo(Patch{p.vertices, {}}, bytes, testGrid());
+    // A triangle cluster's header never reads as points, nor the other way round.
+    EXPECT_FALSE(readClusterInfo(encode(makePatch(4, 4, 1, {0, 0, 0}, 22)))->points());
+}
+
+TEST(ClusterCodecTest, APointClusterWithTrianglesOrAnIndexStreamIsRefused) {
+    const Patch p = makePatch(8, 8, 37, {1000, 2000, 3000}, 23);
+    std::vector<std::byte> points(encodedClusterBound(p.vertices.size(), 0));
+    points.resize(*encodeCluster(p.vertices, {}, points));
+    std::vector<std::byte> withTriangles = points;
+    withTriangles[2] = std::byte{1}; // triangleCount 1 with the points flag
+    EXPECT_FALSE(readClusterInfo(withTriangles).isOk());
+    std::vector<std::byte> withIndexStream = points;
+    withIndexStream[6] = std::byte{4}; // indexStreamBytes
+    withIndexStream.resize(withIndexStream.size() + 4, std::byte{0xe1});
+    EXPECT_FALSE(readClusterInfo(withIndexStream).isOk());
+    std::vector<std::byte> triangles = encode(p);
+    triangles[1] |= std::byte{2}; // the points flag on a cluster of triangles
+    EXPECT_FALSE(readClusterInfo(triangles).isOk());
+    for (std::size_t n = 0; n < points.size(); ++n) {
+        const std::span<const std::byte> prefix(points.data(), n);
+        std::vector<PackedVertex> v(kMaxClusterVertices);
+        std::vector<std::uint8_t> idx;
+        EXPECT_FALSE(decodeCluster(prefix, testGrid(), v, idx).isOk()) << n;
+    }
 }
 
 // Every reader of the new bytes is memory-safe: every prefix is refused, and random bit flips

@@ -136,7 +136,7 @@ TEST(NodeRecordV2Test, TruncationAndGarbageAreRefusedOrStayInsideTheParent) {
 }
 
 TEST(NodeRecordV2Test, RepresentationRecordsRoundTripAndRefuseUnknownKinds) {
-    const RepresentationRecord r{RepresentationKind::Splats, 0, 17, 99, 4096, 777, 0.125f};
+    const RepresentationRecord r{RepresentationKind::ImageLevel, 0, 17, 99, 4096, 777, 0.125f};
     std::array<std::byte, kRepresentationRecordSize> bytes{};
     ASSERT_TRUE(encodeRepresentation(r, bytes).isOk());
     const auto d = decodeRepresentation(bytes);
@@ -152,7 +152,17 @@ TEST(NodeRecordV2Test, RepresentationRecordsRoundTripAndRefuseUnknownKinds) {
     bytes[1] = std::byte{kRepresentationStandIn};
     EXPECT_TRUE(decodeRepresentation(bytes).isOk()) << "a stand-in of clusters, error 0.125";
     bytes[0] = std::byte{2};
-    EXPECT_FALSE(decodeRepresentation(bytes).isOk()) << "only clusters stand in";
+    EXPECT_TRUE(decodeRepresentation(bytes).isOk()) << "splats standing in, error 0.125";
+    bytes[0] = std::byte{4};
+    EXPECT_FALSE(decodeRepresentation(bytes).isOk()) << "only clusters and splats stand in";
+    bytes[0] = std::byte{2};
+    bytes[1] = std::byte{0};
+    EXPECT_FALSE(decodeRepresentation(bytes).isOk()) << "splats are always a stand-in";
+    RepresentationRecord splats{RepresentationKind::Splats, 0, 3, 5, 16, 200, 0.5f};
+    EXPECT_FALSE(encodeRepresentation(splats, bytes).isOk());
+    splats.flags = kRepresentationStandIn;
+    ASSERT_TRUE(encodeRepresentation(splats, bytes).isOk());
+    EXPECT_EQ(decodeRepresentation(bytes).value(), splats);
     RepresentationRecord standIn{RepresentationKind::Clusters, kRepresentationStandIn, 3, 5, 16, 200, 0.5f};
     ASSERT_TRUE(encodeRepresentation(standIn, bytes).isOk());
     EXPECT_EQ(decodeRepresentation(bytes).value(), standIn);

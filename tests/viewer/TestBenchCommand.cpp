@@ -137,7 +137,10 @@ TEST(BenchCommandTest, ViewsScenarioWritesOneRowPerMeasurementChartsAndReport) {
             "scene_triangles",
             "scene_file_bytes",
             "representation",
-            "stand_ins"};
+            "stand_ins",
+            "splat_sets",
+            "splats",
+            "splat_size"};
     EXPECT_EQ(csv[0], expectedColumns);
     // full once (not swept), faces at eps 1 and 4.
     ASSERT_EQ(csv.size(), 4u);

@@ -45,6 +45,7 @@ struct BuildArgs {
     std::optional<std::uint64_t> clusterLeafTriangles; ///< unset: HierarchyParams::leafTriangles()
     bool clusterNodes = false;
     bool standIns = false;
+    int splatSpacing = 0;
     bool quiet = false;
 };
 
@@ -86,6 +87,7 @@ int runBuild(const BuildArgs& args) {
     options.hierarchy.clusterLeafTriangles = args.clusterLeafTriangles;
     options.hierarchy.clusterNodes = args.clusterNodes;
     options.hierarchy.standIns = args.standIns;
+    options.hierarchy.splatSpacing = args.splatSpacing;
     options.hierarchy.bakeResolution = args.bakeResolution;
     options.hierarchy.bakeInnerDirect = args.bakeInner == "direct";
     options.hierarchy.cubeCost = args.cubeCost;
@@ -229,6 +231,11 @@ CommandRunner addBuildCommand(CLI::App& app) {
     cmd->add_flag("--stand-ins", args->standIns,
                   "--format 2: give cells a simplified copy of their subtree (meshoptimizer, borders locked), drawn "
                   "instead of it where its error is below --epsilon pixels (docs/methods.md, \"Stand-ins\")");
+    cmd->add_option("--splats", args->splatSpacing,
+                    "--format 2: give cells point splats standing in for their subtree, spaced at 1/N of the cell's "
+                    "largest side (8-16; Wand & Strasser), drawn where their error is below --epsilon pixels; with "
+                    "--stand-ins, only where no simplified copy pays (docs/methods.md, \"Splats\")")
+            ->check(CLI::Range(1, 64));
     cmd->add_flag("-q,--quiet", args->quiet, "No progress or summary on stderr");
     return [args]() { return runBuild(*args); };
 }

@@ -53,7 +53,10 @@ int runCheck(const CheckArgs& args) {
                                 {"cluster_pages", hierarchy->clusterPages},
                                 {"triangles", hierarchy->triangles},
                                 {"stand_ins", hierarchy->standIns},
-                                {"stand_in_triangles", hierarchy->standInTriangles}};
+                                {"stand_in_triangles", hierarchy->standInTriangles},
+                                {"splat_sets", hierarchy->splatSets},
+                                {"splats", hierarchy->splats},
+                                {"splat_triangles", hierarchy->splatTriangles}};
         if (!status.isOk()) {
             out["error"] = status.message();
             out["code"] = errorCodeName(status.code());
@@ -67,13 +70,16 @@ int runCheck(const CheckArgs& args) {
                     static_cast<unsigned long long>((*scene)->pageCount()), (*scene)->pageSize());
         if (hierarchy)
             std::printf("format 2: %llu nodes, %llu clusters in %llu pages, %llu triangles decoded, "
-                        "%llu stand-ins of %llu triangles\n",
+                        "%llu stand-ins of %llu triangles, %llu splat sets of %llu splats and %llu triangles\n",
                         static_cast<unsigned long long>(hierarchy->nodes),
                         static_cast<unsigned long long>(hierarchy->clusters),
                         static_cast<unsigned long long>(hierarchy->clusterPages),
                         static_cast<unsigned long long>(hierarchy->triangles),
                         static_cast<unsigned long long>(hierarchy->standIns),
-                        static_cast<unsigned long long>(hierarchy->standInTriangles));
+                        static_cast<unsigned long long>(hierarchy->standInTriangles),
+                        static_cast<unsigned long long>(hierarchy->splatSets),
+                        static_cast<unsigned long long>(hierarchy->splats),
+                        static_cast<unsigned long long>(hierarchy->splatTriangles));
     }
     return 0;
 }

@@ -39,10 +39,22 @@ CLI::Option* addRepresentationOption(CLI::App& cmd, runtime::Representation& rep
                     },
                     "What a cell may be drawn as instead of its subtree: auto (its cube below epsilon pixels, "
                     "else its stand-in where its error is below epsilon pixels; format 2 built with "
-                    "--stand-ins), cube (never a stand-in) or simplified (the stand-in also where auto draws "
-                    "the cube)")
-            ->check(CLI::IsMember({"auto", "cube", "simplified"}))
+                    "--stand-ins or --splats), cube (never a stand-in), simplified or splats (that kind of "
+                    "stand-in also where auto draws the cube; a cell without one is refined)")
+            ->check(CLI::IsMember({"auto", "cube", "simplified", "splats"}))
             ->default_str(runtime::representationName(representation));
+}
+
+void addSplatOptions(CLI::App& cmd, runtime::SplatStyle& style) {
+    cmd.add_option("--splat-size", style.pixels,
+                   "Splats' diameter in pixels (1-3; a cell's splats are drawn where this covers twice their error)")
+            ->check(CLI::Range(1.0f, 3.0f))
+            ->capture_default_str();
+    cmd.add_option_function<std::string>(
+               "--splat-shape", [&style](const std::string& shape) { style.round = shape == "round"; },
+               "Splats as discs (round) or squares (square)")
+            ->check(CLI::IsMember({"round", "square"}))
+            ->default_str(style.round ? "round" : "square");
 }
 
 CLI::Option* addCubeAnisotropyOption(CLI::App& cmd, float& anisotropy) {

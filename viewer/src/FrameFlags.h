@@ -17,8 +17,10 @@ extern const char* const kEpsilonHelp;
 CLI::Option* addEpsilonOption(CLI::App& cmd, float& epsilon);
 CLI::Option* addMethodOption(CLI::App& cmd, std::string& method);
 CLI::Option* addCubeDrawOption(CLI::App& cmd, std::string& cubeDraw);
-/** `--representation auto|cube|simplified` (runtime::Representation). */
+/** `--representation auto|cube|simplified|splats` (runtime::Representation). */
 CLI::Option* addRepresentationOption(CLI::App& cmd, runtime::Representation& representation);
+/** `--splat-size 1|2|3` and `--splat-shape round|square` (runtime::SplatStyle). */
+void addSplatOptions(CLI::App& cmd, runtime::SplatStyle& style);
 CLI::Option* addCubeAnisotropyOption(CLI::App& cmd, float& anisotropy);
 CLI::Option* addGpuBudgetOption(CLI::App& cmd, std::string& gpuBudget);
 CLI::Option* addGpuUploadsOption(CLI::App& cmd, std::uint32_t& uploads);

@@ -25,6 +25,7 @@ struct RenderArgs {
     std::string size = "640x480";
     float epsilon = 1.0f;
     runtime::Representation representation = runtime::Representation::Auto;
+    runtime::SplatStyle splats;
     std::string method = "hierarchical";
     std::string cubeDraw = "auto";
     float cubeAnisotropy = 1.0f;
@@ -86,6 +87,7 @@ int runRender(const RenderArgs& args) {
     frameContext.selection.method = *method;
     frameContext.selection.epsilonPixels = args.epsilon;
     frameContext.selection.representation = args.representation;
+    frameContext.selection.splats = args.splats;
     frameContext.selection.cubeStyle =
             runtime::parseCubeStyle(args.cubeDraw).value_or(runtime::CubeStyle::Auto); // checked by CLI11
     frameContext.selection.maxCubeAnisotropy = args.cubeAnisotropy;
@@ -137,6 +139,7 @@ CommandRunner addRenderCommand(CLI::App& app) {
     cmd->add_option("--size", args->size, "Image size WIDTHxHEIGHT")->capture_default_str();
     addEpsilonOption(*cmd, args->epsilon);
     addRepresentationOption(*cmd, args->representation);
+    addSplatOptions(*cmd, args->splats);
     addMethodOption(*cmd, args->method);
     addCubeDrawOption(*cmd, args->cubeDraw);
     addCubeAnisotropyOption(*cmd, args->cubeAnisotropy);

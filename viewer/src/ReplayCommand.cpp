@@ -42,6 +42,7 @@ struct ReplayArgs {
     std::string size = "640x480";
     float epsilon = 1.0f;
     runtime::Representation representation = runtime::Representation::Auto;
+    runtime::SplatStyle splats;
     float cubeAnisotropy = 1.0f;
     unsigned ioThreads = 2;
     std::size_t uploadsPerFrame = 64;
@@ -122,6 +123,7 @@ int runReplay(const ReplayArgs& args) {
     frameContext.height = size->y;
     frameContext.selection.epsilonPixels = args.epsilon;
     frameContext.selection.representation = args.representation;
+    frameContext.selection.splats = args.splats;
     frameContext.selection.maxCubeAnisotropy = args.cubeAnisotropy;
     frameContext.occlusion = args.occlusion;
     frameContext.budgets.pageInstallsPerFrame = args.uploadsPerFrame;
@@ -313,6 +315,7 @@ CommandRunner addReplayCommand(CLI::App& app) {
     cmd->add_option("--size", args->size, "Image size WIDTHxHEIGHT")->capture_default_str();
     addEpsilonOption(*cmd, args->epsilon);
     addRepresentationOption(*cmd, args->representation);
+    addSplatOptions(*cmd, args->splats);
     addCubeAnisotropyOption(*cmd, args->cubeAnisotropy);
     addOcclusionOptions(*cmd, args->occlusion);
     cmd->add_option("--io-threads", args->ioThreads, "Background read threads")->capture_default_str();

@@ -33,6 +33,7 @@ struct ViewArgs {
     std::string size = "1280x720";
     float epsilon = 1.0f;
     runtime::Representation representation = runtime::Representation::Auto;
+    runtime::SplatStyle splats;
     std::string method = "hierarchical";
     std::string gpuBudget = "512MiB";
     std::uint64_t cacheMb = 0;
@@ -268,6 +269,7 @@ int runView(const ViewArgs& args) {
         frameContext.selection.method = controls.method;
         frameContext.selection.epsilonPixels = controls.epsilonPixels;
         frameContext.selection.representation = args.representation;
+        frameContext.selection.splats = args.splats;
         frameContext.occlusion = args.occlusion;
         frameContext.budgets.pageInstallsPerFrame = args.uploadsPerFrame;
         frameContext.budgets.gpuUploadsPerFrame = args.gpuUploadsPerFrame;
@@ -359,6 +361,7 @@ CommandRunner addViewCommand(CLI::App& app) {
     cmd->add_option("--size", args->size, "Window size WIDTHxHEIGHT")->capture_default_str();
     addEpsilonOption(*cmd, args->epsilon);
     addRepresentationOption(*cmd, args->representation);
+    addSplatOptions(*cmd, args->splats);
     addMethodOption(*cmd, args->method);
     cmd->add_option("--cache-mb", args->cacheMb, "Stream pages through a page cache of this many MiB (0: map everything)")
             ->capture_default_str();

@@ -89,6 +89,7 @@ GLuint occludingOpacity(float threshold) {
 struct Renderer::Impl {
     RendererOptions options;
     GLuint geometryProgram = 0;
+    GLuint roundSplatProgram = 0; ///< point clusters as discs (square ones: geometryProgram)
     GLuint cubeProgram = 0;
     GLuint cubePointProgram = 0;
     GLuint cubeOccluderProgram = 0;      ///< cubes as occluders (OcclusionOptions::cubesOcclude)
@@ -142,6 +143,8 @@ struct Renderer::Impl {
     GLsizeiptr iotaCap = 0;
     std::vector<IndirectCommand> commands;
     std::vector<IndexedCommand> indexedCommands;
+    std::vector<IndirectCommand> pointCommands; ///< format 2's point clusters (splats)
+    SplatStyle splats;                          ///< how the batch draws them
     std::vector<glm::mat4> normalScratch;
     std::vector<glm::vec4> eyeScratch;
     // Render target.
@@ -174,6 +177,8 @@ struct Renderer::Impl {
      *  view as a cached cluster page, or clusters past its table, which NodePages already
      *  refused to hand out). */
     bool appendClusterCommands(const GeometryDraw& draw, std::uint32_t slot);
+    /** Binds `program` (geometryProgram or roundSplatProgram) with the frame's uniforms. */
+    void useGeometryProgram(GLuint program, const glm::mat4& viewProjection);
     void drawBatch(const glm::mat4& viewProjection);
     Status drawGeometry(const DrawList& list, const glm::mat4& viewProjection, FrameStats& stats);
     void drawCubes(const DrawList& list, const glm::mat4& viewProjection, float pixelScale);
@@ -193,6 +198,7 @@ Renderer::Impl::~Impl() {
     const GLuint vaos[] = {geometryVao, cubeVao};
     glDeleteVertexArrays(2, vaos);
     glDeleteProgram(geometryProgram);
+    glDeleteProgram(roundSplatProgram);
     glDeleteProgram(cubeProgram);
     glDeleteProgram(cubePointProgram);
     glDeleteProgram(cubeOccluderProgram);
@@ -221,6 +227,8 @@ Result<std::unique_ptr<Renderer>> Renderer::create(
     auto impl = std::make_unique<Impl>();
     impl->options = options;
     FF_ASSIGN_OR_RETURN(impl->geometryProgram, linkGlProgram({gl::kGeometryVertexShader}, gl::kGeometryFragmentShader));
+    FF_ASSIGN_OR_RETURN(impl->roundSplatProgram,
+                        linkGlProgram({gl::kGeometryVertexShader}, gl::kRoundSplatFragmentShader));
     FF_ASSIGN_OR_RETURN(impl->cubeProgram, linkGlProgram({gl::kCubeShaderInputs, gl::kCubeVertexShader}, gl::kCubeFragmentShader));
     FF_ASSIGN_OR_RETURN(impl->queries, gl::OcclusionQueries::create());
     FF_ASSIGN_OR_RETURN(impl->cubePointProgram, linkGlProgram({gl::kCubeShaderInputs, gl::kCubePointVertexShader}, gl::kCubeFragmentShader));
@@ -484,6 +492,11 @@ bool Renderer::Impl::appendClusterCommands(const GeometryDraw& draw, std::uint32
     const std::uint64_t base = std::uint64_t{slot} * static_cast<std::uint64_t>(slotBytes);
     const std::uint64_t indices = base + std::uint64_t{page->vertexCount()} * sizeof(storage::PackedVertex);
     for (const storage::IndexedCluster& cluster : clusters) {
+        if (cluster.info.points()) {
+            pointCommands.push_back(
+                    {cluster.info.vertexCount, 1, slot * verticesPerSlot + cluster.firstVertex, draw.transform});
+            continue;
+        }
         indexedCommands.push_back(
                 {cluster.info.triangleCount * 3,
                  1,
@@ -494,36 +507,55 @@ bool Renderer::Impl::appendClusterCommands(const GeometryDraw& draw, std::uint32
     return true;
 }
 
+void Renderer::Impl::useGeometryProgram(GLuint program, const glm::mat4& viewProjection) {
+    glUseProgram(program);
+    glUniformMatrix4fv(glGetUniformLocation(program, "uViewProjection"), 1, GL_FALSE, glm::value_ptr(viewProjection));
+    glUniform3f(glGetUniformLocation(program, "uLightDirection"), storage::kLightDirection[0],
+                storage::kLightDirection[1], storage::kLightDirection[2]);
+    glUniform1f(glGetUniformLocation(program, "uAmbient"), storage::kAmbient);
+    glUniform1f(glGetUniformLocation(program, "uDiffuse"), storage::kDiffuse);
+    glUniform1f(glGetUniformLocation(program, "uPointSize"), splats.pixels * static_cast<float>(frameSupersample));
+}
+
 void Renderer::Impl::drawBatch(const glm::mat4& viewProjection) {
-    if (commands.empty() && indexedCommands.empty())
+    if (commands.empty() && indexedCommands.empty() && pointCommands.empty())
         return;
+    // Triangles' commands, then the points' (4-byte aligned: both are arrays of GLuint).
     const auto bytes = clustered ? static_cast<GLsizeiptr>(indexedCommands.size() * sizeof(IndexedCommand))
                                  : static_cast<GLsizeiptr>(commands.size() * sizeof(IndirectCommand));
+    const auto pointBytes = static_cast<GLsizeiptr>(pointCommands.size() * sizeof(IndirectCommand));
     BatchBuffers& set = current();
-    ensureCapacity(set.indirect, set.indirectCap, bytes);
+    ensureCapacity(set.indirect, set.indirectCap, bytes + pointBytes);
     if (clustered)
         bufferSubData(set.indirect, 0, bytes, indexedCommands.data());
     else
         bufferSubData(set.indirect, 0, bytes, commands.data());
-    glUseProgram(geometryProgram);
-    glUniformMatrix4fv(glGetUniformLocation(geometryProgram, "uViewProjection"), 1, GL_FALSE, glm::value_ptr(viewProjection));
-    glUniform3f(glGetUniformLocation(geometryProgram, "uLightDirection"), storage::kLightDirection[0],
-                storage::kLightDirection[1], storage::kLightDirection[2]);
-    glUniform1f(glGetUniformLocation(geometryProgram, "uAmbient"), storage::kAmbient);
-    glUniform1f(glGetUniformLocation(geometryProgram, "uDiffuse"), storage::kDiffuse);
+    if (pointBytes > 0)
+        bufferSubData(set.indirect, bytes, pointBytes, pointCommands.data());
+    useGeometryProgram(geometryProgram, viewProjection);
     glBindVertexArray(geometryVao);
     glBindBuffer(GL_DRAW_INDIRECT_BUFFER, set.indirect);
-    if (clustered)
+    if (clustered && !indexedCommands.empty())
         glMultiDrawElementsIndirect(GL_TRIANGLES, GL_UNSIGNED_BYTE, nullptr, static_cast<GLsizei>(indexedCommands.size()), 0);
-    else
+    else if (!clustered)
         glMultiDrawArraysIndirect(GL_TRIANGLES, nullptr, static_cast<GLsizei>(commands.size()), 0);
+    if (!pointCommands.empty()) {
+        if (splats.round)
+            useGeometryProgram(roundSplatProgram, viewProjection);
+        glEnable(GL_PROGRAM_POINT_SIZE);
+        glMultiDrawArraysIndirect(GL_POINTS, reinterpret_cast<const void*>(static_cast<std::uintptr_t>(bytes)),
+                                  static_cast<GLsizei>(pointCommands.size()), 0);
+        glDisable(GL_PROGRAM_POINT_SIZE);
+    }
     commands.clear();
     indexedCommands.clear();
+    pointCommands.clear();
     ++batch;
 }
 
 Status Renderer::Impl::drawGeometry(const DrawList& list, const glm::mat4& viewProjection, FrameStats& stats) {
     ++batch;
+    splats = list.splats;
     for (const GeometryDraw& draw : list.geometry) {
         Result<std::uint32_t> slot = residentSlot(draw, stats);
         if (!slot && slot.status().code() == ErrorCode::OutOfBudget) {
@@ -533,6 +565,7 @@ Status Renderer::Impl::drawGeometry(const DrawList& list, const glm::mat4& viewP
         if (!slot) {
             commands.clear();
             indexedCommands.clear();
+            pointCommands.clear();
             return slot.status();
         }
         slotBatch[*slot] = batch;
@@ -541,6 +574,7 @@ Status Renderer::Impl::drawGeometry(const DrawList& list, const glm::mat4& viewP
             commands.push_back({draw.count * 3, 1, *slot * verticesPerSlot + draw.first * 3, draw.transform});
         else if (!appendClusterCommands(draw, *slot)) {
             indexedCommands.clear();
+            pointCommands.clear();
             return Status(ErrorCode::Corrupt, "page " + std::to_string(draw.page) + ": not a cached cluster page");
         }
     }
@@ -762,6 +796,7 @@ BatchVisibility Renderer::visibleParts(const DrawList& batch) {
                 clusterBit += c.count / 3;
             }
             s.indexedCommands.clear();
+            s.pointCommands.clear(); // splats have no triangle bits: the oracle keeps them out
         }
         bit += draw.triangles;
     }

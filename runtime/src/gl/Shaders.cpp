@@ -26,6 +26,7 @@ uniform mat4 uViewProjection;
 uniform vec3 uLightDirection;
 uniform float uAmbient;
 uniform float uDiffuse;
+uniform float uPointSize; // splats' diameter in pixels (points only)
 out vec3 vColor;
 
 vec3 decodeOct(vec2 e) {
@@ -49,6 +50,7 @@ void main() {
         light = uAmbient + uDiffuse * abs(dot(n, uLightDirection));
     }
     vColor = srgbToLinear(aColor.rgb) * light;
+    gl_PointSize = uPointSize;
 }
 )";
 
@@ -56,6 +58,18 @@ const char* const kGeometryFragmentShader = R"(#version 450 core
 in vec3 vColor;
 layout(location = 0) out vec4 fragColor;
 void main() { fragColor = vec4(vColor, 1.0); }
+)";
+
+// A program apart: a discard in the triangles' shader would cost them early depth testing.
+const char* const kRoundSplatFragmentShader = R"(#version 450 core
+in vec3 vColor;
+layout(location = 0) out vec4 fragColor;
+void main() {
+    vec2 d = gl_PointCoord - vec2(0.5);
+    if (dot(d, d) > 0.25)
+        discard;
+    fragColor = vec4(vColor, 1.0);
+}
 )";
 
 const char* const kCubeVertexShader = R"(out vec4 vColor;

@@ -5,6 +5,9 @@ namespace ff::runtime::gl {
 /** Geometry: PackedVertex attributes, per-draw transform index via baseInstance. */
 extern const char* const kGeometryVertexShader;
 extern const char* const kGeometryFragmentShader;
+/** Splats (point clusters) drawn as discs: with the geometry vertex shader, whose points are
+ *  uPointSize pixels wide (squares: kGeometryFragmentShader). */
+extern const char* const kRoundSplatFragmentShader;
 /** Declarations both cube vertex shaders start with (#version, the per-cube attributes and
  *  buffers): compiled as the first source string before either body below. */
 extern const char* const kCubeShaderInputs;

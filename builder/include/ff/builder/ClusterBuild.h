@@ -31,6 +31,7 @@ struct ClusterBuildStats {
     std::uint64_t clusterVertices = 0; ///< vertices over all clusters (shared ones repeat)
     std::uint64_t encodedBytes = 0;
     std::uint64_t wideClusters = 0;
+    std::uint64_t points = 0; ///< splats, in point clusters (encodePoints)
 
     ClusterBuildStats& operator+=(const ClusterBuildStats& other) noexcept;
 };
@@ -49,6 +50,13 @@ public:
     encode(std::span<const storage::PackedTriangle> triangles,
            const storage::PositionGrid& grid,
            std::vector<std::byte>& out);
+
+    /** Appends `points` (splats) as point clusters of up to 255, in spatial order (the vertex
+     *  codec stores neighbours' small deltas), positions quantized on `grid`. */
+    [[nodiscard]] Result<ClusterBuildStats>
+    encodePoints(std::span<const storage::PackedVertex> points,
+                 const storage::PositionGrid& grid,
+                 std::vector<std::byte>& out);
 
     /** How many clusters encode() makes of `triangles`, without encoding them. */
     [[nodiscard]] Result<std::uint32_t>

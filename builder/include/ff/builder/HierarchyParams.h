@@ -86,6 +86,12 @@ struct HierarchyParams {
     /** Format 2 only: cells carry simplified stand-ins of their subtrees, drawn where their
      *  error projects below ε pixels (builder/src/StandIns.h, docs/methods.md §12). */
     bool standIns = false;
+    /** Format 2 only: cells carry point splats standing in for their subtrees, spaced at
+     *  1/splatSpacing of the cell's largest side (8-16; 0: none), where no simplified stand-in
+     *  pays (builder/src/Splats.h, docs/methods.md §13). */
+    int splatSpacing = 0;
+    /** Whether cells get stand-ins of either kind. */
+    [[nodiscard]] bool anyStandIns() const noexcept { return standIns || splatSpacing > 0; }
     /** clusterLeafTriangles, or its default for clusterNodes. */
     [[nodiscard]] std::uint64_t leafTriangles() const noexcept {
         return clusterLeafTriangles.value_or(

@@ -1,5 +1,7 @@
 #pragma once
 
+#include <ff/runtime/Selection.h>
+
 #include <glm/glm.hpp>
 
 #include <array>
@@ -48,6 +50,8 @@ struct DrawList {
     /** The cubes are occluders (OcclusionOptions::cubesOcclude): drawn to depth only, where the
      *  opacity accumulated over a pixel reaches the frame's threshold, not in color. */
     bool cubesOcclude = false;
+    /** How the point clusters among `geometry` (splats) are drawn. */
+    SplatStyle splats;
 
     /** Bytes the entries take now (what FrameBudgets::drawBatchBytes bounds). */
     std::size_t bytes() const noexcept {

@@ -22,6 +22,10 @@ struct FrameStats {
     /** Cells drawn as their stand-in (a simplified copy of their subtree; its triangles are
      *  among trianglesDrawn). */
     std::uint64_t standInsDrawn = 0;
+    /** Cells drawn as their splats (builder/src/Splats.h), and the splats drawn; the splat sets'
+     *  triangles are among trianglesDrawn. */
+    std::uint64_t splatSetsDrawn = 0;
+    std::uint64_t splatsDrawn = 0;
     std::uint64_t geometryDraws = 0; ///< draw commands for geometry (merged page runs)
     std::uint64_t pagesUploaded = 0; ///< geometry pages sent to the GPU this frame
     /** Cells drawn coarser than the ε rule wanted because pages were not resident ("debt"). */

@@ -29,11 +29,23 @@ enum class CubeStyle {
 /** What a cell that the ε rule would refine may be drawn as instead (`--representation`). */
 enum class Representation {
     /** Its cube where the cell is below ε pixels, else its stand-in (a simplified copy of the
-     *  subtree, format 2 files built with --stand-ins) where the stand-in's error is below ε
-     *  pixels, else its own payload and children. */
+     *  subtree or splats, format 2 files built with --stand-ins or --splats) where the
+     *  stand-in's error is below ε pixels, else its own payload and children. */
     Auto,
     Cube,       ///< never a stand-in (the hierarchy as before stand-ins)
-    Simplified, ///< a stand-in wherever auto would draw the cube or the stand-in
+    /** A simplified stand-in wherever auto would draw the cube or a stand-in; a cell without
+     *  one is refined (its own triangles and children). */
+    Simplified,
+    /** Splats wherever auto would draw the cube or a stand-in; a cell without them is refined. */
+    Splats,
+};
+
+/** How splats are drawn (`--splat-size`, `--splat-shape`): opaque, depth-tested points of a
+ *  fixed size; a cell's splats are drawn only where their diameter on screen covers twice
+ *  their error, so they leave no holes. */
+struct SplatStyle {
+    float pixels = 2.0f; ///< the points' diameter on screen
+    bool round = true;   ///< discs; false: squares
 };
 
 /** The names users type and read (`--method`, `--cube-draw`, bench scenarios, the HUD): one
@@ -42,7 +54,7 @@ const char* methodName(Method method) noexcept;
 /** "hierarchical" or "full"; nullopt for anything else. */
 std::optional<Method> parseMethod(std::string_view name) noexcept;
 const char* representationName(Representation representation) noexcept;
-/** "auto", "cube" or "simplified"; nullopt for anything else. */
+/** "auto", "cube", "simplified" or "splats"; nullopt for anything else. */
 std::optional<Representation> parseRepresentation(std::string_view name) noexcept;
 const char* cubeStyleName(CubeStyle style) noexcept;
 /** "faces", "points" or "auto"; nullopt for anything else. */
@@ -71,6 +83,7 @@ struct SelectionOptions {
     float epsilonPixels = 1.0f;
     CubeStyle cubeStyle = CubeStyle::Auto;
     Representation representation = Representation::Auto;
+    SplatStyle splats;
     /** A cube whose coverage (alpha) along the three axes differs by more than this is refused
      *  where the cell can be refined: such a cell (slabs of a venetian blind, a sheet seen
      *  edge-on) looks opaque from one side and transparent from another, and interpolating its

@@ -86,6 +86,9 @@ struct ClusterInfo {
     std::uint32_t triangleCount = 0;
     std::uint32_t encodedBytes = 0; ///< header and both streams: where the next cluster starts
     bool widePositions = false;     ///< 32-bit coordinates (the cluster spans ≥ 2^16 steps)
+
+    /** A point cluster (splats): vertices drawn as points, no triangles, no index stream. */
+    [[nodiscard]] bool points() const noexcept { return triangleCount == 0; }
 };
 
 /** Encoded bytes a cluster of this size takes at most. */
@@ -94,8 +97,8 @@ encodedClusterBound(std::size_t vertexCount, std::size_t triangleCount) noexcept
 
 /**
  * Encodes one cluster into `out` (at least encodedClusterBound() bytes) and returns the bytes
- * written. `indices` are 3 per triangle, each below vertices.size(); 1-255 vertices, 1-512
- * triangles, coordinates below 2^31. Deterministic: the same input gives the same bytes.
+ * written. `indices` are 3 per triangle, each below vertices.size(); 1-255 vertices, 0-512
+ * triangles (none: a point cluster, whose vertices are splats), coordinates below 2^31. Deterministic: the same input gives the same bytes.
  * For the best compression, order triangles for the vertex cache and vertices by first use
  * (meshopt_optimizeVertexCache, meshopt_optimizeVertexFetch) before.
  */

@@ -20,8 +20,11 @@ struct HierarchySummary {
     std::uint64_t clusters = 0;
     std::uint64_t triangles = 0;    ///< stored: each prototype's once
     std::uint64_t clusterPages = 0; ///< Geometry pages a representation names
-    std::uint64_t standIns = 0;     ///< nodes with a stand-in for their subtree
+    std::uint64_t standIns = 0;     ///< nodes with a simplified stand-in for their subtree
     std::uint64_t standInTriangles = 0; ///< theirs (not among `triangles`)
+    std::uint64_t splatSets = 0;        ///< nodes with splats standing in for their subtree
+    std::uint64_t splats = 0;           ///< their points
+    std::uint64_t splatTriangles = 0;   ///< their triangles too large to splat
 };
 
 /**

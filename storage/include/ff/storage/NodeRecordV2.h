@@ -64,16 +64,19 @@ struct NodeV2 {
 /** What a payload holds. New kinds are added here, not by a new format. */
 enum class RepresentationKind : std::uint8_t {
     Clusters = 1,        ///< ClusterCodec clusters, back to back
-    Splats = 2,          ///< reserved for point splats
+    /** Point splats standing in for the node's subtree (always flagged kRepresentationStandIn):
+     *  a run of clusters as Clusters, point clusters (no triangles) and clusters of the
+     *  triangles too large to splat; `parameter` is its error (FORMAT.md §5.3). */
+    Splats = 2,
     KeyframedSplats = 3, ///< reserved for animated splats
     ImageLevel = 4,      ///< reserved for image-based levels
     VisibleSet = 5,      ///< reserved for precomputed visibility
 };
 
 enum RepresentationFlags : std::uint8_t {
-    /** A simplified stand-in for the node's whole subtree (its own payloads and everything
-     *  below it), drawn instead of them where its error is small enough on screen: Clusters
-     *  only; `parameter` is its error in the hierarchy's units (FORMAT.md §5.3). */
+    /** A stand-in for the node's whole subtree (its own payloads and everything below it),
+     *  drawn instead of them where its error is small enough on screen: Clusters (simplified)
+     *  or Splats; `parameter` is its error in the hierarchy's units (FORMAT.md §5.3). */
     kRepresentationStandIn = 1u << 0,
 };
 inline constexpr std::uint8_t kKnownRepresentationFlags = kRepresentationStandIn;
@@ -109,11 +112,12 @@ encodeNodeV2(const NodeV2& node, const NodeBox& parent, std::span<std::byte> out
 
 [[nodiscard]] Status encodeRepresentation(const RepresentationRecord& r, std::span<std::byte> out);
 /** Reads and checks the record at the start of `bytes`: a known kind, known flags (a stand-in
- *  only of clusters, its error >= 0), a finite parameter; where it points is checked by who
+ *  only of clusters or splats, its error >= 0; splats only as a stand-in), a finite parameter; where it points is checked by who
  *  reads the page. */
 [[nodiscard]] Result<RepresentationRecord> decodeRepresentation(std::span<const std::byte> bytes);
 
-/** Whether `r` is a subtree's stand-in (kRepresentationStandIn), not the node's own payload. */
+/** Whether `r` is a subtree's stand-in (kRepresentationStandIn: simplified clusters or
+ *  splats), not the node's own payload. */
 constexpr bool isStandIn(const RepresentationRecord& r) noexcept {
     return (r.flags & kRepresentationStandIn) != 0;
 }

@@ -1,0 +1,89 @@
+#pragma once
+
+// Static point splats (issue 17; Wand & Straßer 2002, §3.1-3.5, the static case): a cell may
+// stand in for its subtree with opaque, depth-tested points spaced at a fixed fraction of the
+// cell's size, plus the triangles too large to splat, drawn as they are.
+//
+// Chosen per cell from the triangles below it, as the paper does:
+//  1. candidates: random surface points, triangles picked by area, n ln n x kSplatSafety of them
+//     for n bins of diagonal spacing/8 (the coupon collector's bound: every bin a surface fully
+//     covers gets one, with high probability), thinned to one per bin of the same size;
+//  2. stratification: candidates deleted in random order while another within spacing/2 covers
+//     them, never one that is the last cover of a point deleted before (no cascaded deletion);
+//  3. attributes: each kept point's colour and normal a Gaussian average of the candidates
+//     around it (a set some 70 x denser than the kept one);
+//  4. a triangle that keeps more than kMaxSplatsPerTriangle points is drawn as a triangle (never
+//     slower than rasterising it), and the splats are chosen again without it.
+// Every surface point then lies within splatCoverRadius(spacing) of a splat: the splat set's
+// error, which the runtime compares with ε and whose double it draws each point's diameter at.
+
+#include <ff/storage/ClusterCodec.h>
+#include <ff/storage/SceneFormat.h>
+
+#include <array>
+#include <cstdint>
+#include <optional>
+#include <span>
+#include <vector>
+
+namespace ff::builder {
+
+/** The candidate count's safety factor over the coupon collector's n ln n (the paper: 3-5). */
+inline constexpr double kSplatSafety = 3.0;
+/** A triangle that would keep more splats than this is drawn as a triangle instead. */
+inline constexpr std::uint32_t kMaxSplatsPerTriangle = 3;
+/** Splat sets with more candidate bins to fill are not built: memory (~0.6 KB a bin's survivor
+ *  and its neighbours) and time (some 3 x 12 candidates a bin at this size, ~0.1 µs each). */
+inline constexpr std::size_t kMaxSplatBins = std::size_t{1} << 18;
+/** A splat set must cost at most this share of the triangles it replaces (points and kept
+ *  triangles together), as a stand-in must. */
+inline constexpr double kMaxSplatShare = 0.6;
+/** Default spacing: this fraction of a cell's largest side (`build --splat-spacing`). */
+inline constexpr int kDefaultSplatSpacingDivisor = 8;
+
+/** How far a surface point may lie from its nearest splat, for stratification at `spacing`:
+ *  spacing/2 (stratification) + 2 x spacing/8 (a candidate bin's diagonal, twice: the surface to
+ *  its candidate, that candidate to its bin's survivor). */
+constexpr float splatCoverRadius(float spacing) noexcept {
+    return 0.75f * spacing;
+}
+
+/** A cell's splats and the triangles kept with them. */
+struct SplatSet {
+    std::vector<storage::PackedVertex> points;
+    std::vector<storage::PackedTriangle> triangles;
+    /** Hierarchy units: how far the drawn splats may lie from the subtree's own surface (the
+     *  source's error plus splatCoverRadius). */
+    float error = 0.0f;
+};
+
+/** Why a cell got no splat set (TooLarge: over kMaxSplatBins). */
+enum class SplatOutcome : std::uint8_t { Kept, NotReducing, TooLarge, Empty };
+
+/**
+ * Stratifies `points` (Wand & Straßer §3.4.2): visits them in the order of `order` (a
+ * permutation of their indices) and deletes each that another point not deleted lies within
+ * `radius` of, unless it is the only such cover left of a point deleted before. Every deleted
+ * point keeps a kept one within `radius`. Returns the kept indices, ascending.
+ */
+[[nodiscard]] std::vector<std::uint32_t> stratify(
+        std::span<const std::array<float, 3>> points,
+        std::span<const std::uint32_t> order,
+        float radius);
+
+/**
+ * The splat set of `source` (a cell's triangles: own, and its children's stand-ins or
+ * triangles) at `spacing` (hierarchy units) into `out`, positions snapped to `grid` as the
+ * encoder will; `baseError` is the source's own error, `seed` makes the random choices
+ * repeatable. Kept, or why not: it does not pay (over kMaxSplatShare of the source), would take
+ * more than kMaxSplatBins bins, or there is no surface (`out` then unspecified).
+ */
+[[nodiscard]] SplatOutcome splatSource(
+        std::span<const storage::PackedTriangle> source,
+        float spacing,
+        float baseError,
+        const storage::PositionGrid& grid,
+        std::uint64_t seed,
+        SplatSet& out);
+
+} // namespace ff::builder
