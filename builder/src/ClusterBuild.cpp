@@ -206,8 +206,7 @@ Result<ClusterBuildStats> ClusterEncoder::encodePoints(
         out.resize(start + storage::encodedClusterBound(count, 0));
         FF_ASSIGN_OR_RETURN(
                 const std::size_t written,
-                storage::encodeCluster(
-                        std::span(mVertices).subspan(first, count), {}, std::span(out).subspan(start)));
+                storage::encodePointCluster(std::span(mVertices).subspan(first, count), std::span(out).subspan(start)));
         out.resize(start + written);
         FF_ASSIGN_OR_RETURN(
                 const storage::ClusterInfo info,

@@ -54,9 +54,11 @@ public:
         // Cubes of half the radius: a query scans 5^3 of them, 1.7 x fewer points than 3^3 cubes
         // of the radius where points fill a volume (foliage).
         mCell = std::max({radius / 2.0f, extent / static_cast<float>(kMaxCells - 1), 1e-30f});
-        mReach = static_cast<std::int64_t>(std::ceil(radius / mCell));
-        for (std::size_t a = 0; a < 3; ++a)
-            mSize[a] = points.empty() ? 1 : std::min(kMaxCells, static_cast<std::int64_t>((hi[a] - mOrigin[a]) / mCell) + 1);
+        mReach = std::clamp<std::int64_t>(static_cast<std::int64_t>(std::ceil(std::min(radius / mCell, 64.0f))), 1, kMaxCells);
+        for (std::size_t a = 0; a < 3; ++a) {
+            const float cubes = (hi[a] - mOrigin[a]) / mCell; // NaN where points are not finite
+            mSize[a] = cubes >= 0.0f ? std::min(kMaxCells, static_cast<std::int64_t>(std::min(cubes, 1e9f)) + 1) : 1;
+        }
         mFirst.assign(static_cast<std::size_t>(mSize[0] * mSize[1] * mSize[2]) + 1, 0);
         std::vector<std::uint32_t> cellOfPoint(points.size());
         for (std::size_t i = 0; i < points.size(); ++i) {
@@ -75,7 +77,8 @@ public:
     void forEachWithin(const Vec3& p, float radius, Visit&& visit) const {
         const std::array<std::int64_t, 3> c = cellOf(p);
         const float r2 = radius * radius;
-        const std::int64_t r = std::max<std::int64_t>(mReach, static_cast<std::int64_t>(std::ceil(radius / mCell)));
+        const std::int64_t r = std::max<std::int64_t>(
+                mReach, static_cast<std::int64_t>(std::ceil(std::clamp(radius / mCell, 1.0f, 64.0f))));
         for (std::int64_t z = std::max<std::int64_t>(c[2] - r, 0); z <= std::min(c[2] + r, mSize[2] - 1); ++z)
             for (std::int64_t y = std::max<std::int64_t>(c[1] - r, 0); y <= std::min(c[1] + r, mSize[1] - 1); ++y)
                 for (std::int64_t x = std::max<std::int64_t>(c[0] - r, 0); x <= std::min(c[0] + r, mSize[0] - 1); ++x) {
@@ -91,9 +94,10 @@ private:
 
     std::array<std::int64_t, 3> cellOf(const Vec3& p) const {
         std::array<std::int64_t, 3> c{};
-        for (std::size_t a = 0; a < 3; ++a)
-            c[a] = std::clamp<std::int64_t>(
-                    static_cast<std::int64_t>(std::floor((p[a] - mOrigin[a]) / mCell)), 0, mSize[a] - 1);
+        for (std::size_t a = 0; a < 3; ++a) {
+            const float at = std::floor((p[a] - mOrigin[a]) / mCell); // NaN: cube 0
+            c[a] = at >= 0.0f ? std::min(static_cast<std::int64_t>(std::min(at, 1e9f)), mSize[a] - 1) : 0;
+        }
         return c;
     }
     std::uint32_t indexOf(const std::array<std::int64_t, 3>& c) const {
@@ -201,6 +205,14 @@ std::optional<Sampled> sample(
     std::unordered_set<std::uint64_t> takenSparse;
 
     Sampled out;
+    const auto keepFirstInItsBin = [&](const Candidate& c) {
+        const std::uint64_t bin = binOf(c.position);
+        if (dense ? taken[bin] : !takenSparse.insert(bin).second)
+            return;
+        if (dense)
+            taken[bin] = true;
+        out.survivors.push_back(c);
+    };
     std::uniform_real_distribution<double> unit(0.0, 1.0);
     for (std::size_t k = 0; k < count; ++k) {
         Candidate c;
@@ -219,19 +231,43 @@ std::optional<Sampled> sample(
         for (std::size_t a = 0; a < 3; ++a)
             c.position[a] = (1.0f - c.b1 - c.b2) * v[0].position[a] + c.b1 * v[1].position[a] +
                             c.b2 * v[2].position[a];
-        const std::uint64_t bin = binOf(c.position);
-        if (dense ? taken[bin] : !takenSparse.insert(bin).second)
-            continue;
-        if (dense)
-            taken[bin] = true;
-        out.survivors.push_back(c);
+        keepFirstInItsBin(c);
     }
+    // Every edge too, at most a bin's side apart: a bin the surface crosses without covering it
+    // fully holds an edge (a plane's section of a cube has at least a face's area), which the
+    // draws by area need not reach (a wire, a leaf's rim).
+    for (const std::uint32_t t : eligible) {
+        const auto& v = source[t].vertices;
+        for (std::size_t e = 0; e < 3; ++e) {
+            const Vec3 from = v[e].position;
+            const Vec3 to = v[(e + 1) % 3].position;
+            const double length = std::sqrt(static_cast<double>(distanceSquared(from, to)));
+            const auto steps = static_cast<std::uint32_t>(std::max(1.0, std::ceil(length / side)));
+            for (std::uint32_t k = 0; k < steps; ++k) {
+                const float at = static_cast<float>(k) / static_cast<float>(steps);
+                // Barycentric weights of corners 1 and 2 at `at` along edge e.
+                const std::array<std::array<float, 2>, 3> weights = {
+                        {{at, 0.0f}, {1.0f - at, at}, {0.0f, 1.0f - at}}};
+                Candidate c;
+                c.triangle = t;
+                c.b1 = weights[e][0];
+                c.b2 = weights[e][1];
+                for (std::size_t a = 0; a < 3; ++a)
+                    c.position[a] = from[a] + at * (to[a] - from[a]);
+                keepFirstInItsBin(c);
+            }
+        }
+        if (out.survivors.size() > 2 * kMaxSplatBins)
+            return std::nullopt; // thin geometry: far more bins crossed than its area fills
+    }
+    // Stratified in a random order (the draws filled the bins most surface crosses first).
+    std::shuffle(out.survivors.begin(), out.survivors.end(), random);
 
     std::vector<Vec3> positions(out.survivors.size());
     for (std::size_t i = 0; i < positions.size(); ++i)
         positions[i] = out.survivors[i].position;
     std::vector<std::uint32_t> order(positions.size());
-    std::iota(order.begin(), order.end(), 0u); // survivors are in random order already
+    std::iota(order.begin(), order.end(), 0u); // survivors are shuffled
     out.kept = stratify(positions, order, spacing / 2.0f);
     return out;
 }
@@ -332,7 +368,7 @@ SplatOutcome splatSource(
         if (areas[t] > 0.0)
             eligible.push_back(t);
     }
-    if (eligible.empty() || !(spacing > 0.0f))
+    if (eligible.empty() || !(spacing > 0.0f) || !std::isfinite(spacing))
         return SplatOutcome::Empty;
 
     std::mt19937_64 random(seed);
@@ -372,7 +408,8 @@ SplatOutcome splatSource(
     out.triangles.reserve(large.size());
     for (const std::uint32_t t : large)
         out.triangles.push_back(source[t]);
-    out.error = baseError + splatCoverRadius(spacing);
+    // Plus where the grid moved each splat's centre (half a step an axis).
+    out.error = baseError + splatCoverRadius(spacing) + std::sqrt(3.0f) * grid.maxError();
     return SplatOutcome::Kept;
 }
 

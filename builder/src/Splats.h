@@ -7,15 +7,17 @@
 // Chosen per cell from the triangles below it, as the paper does:
 //  1. candidates: random surface points, triangles picked by area, n ln n x kSplatSafety of them
 //     for n bins of diagonal spacing/8 (the coupon collector's bound: every bin a surface fully
-//     covers gets one, with high probability), thinned to one per bin of the same size;
+//     covers gets one, with high probability), and points along every edge a bin's side apart
+//     (bins the surface crosses without covering them), thinned to one per bin;
 //  2. stratification: candidates deleted in random order while another within spacing/2 covers
 //     them, never one that is the last cover of a point deleted before (no cascaded deletion);
 //  3. attributes: each kept point's colour and normal a Gaussian average of the candidates
 //     around it (a set some 70 x denser than the kept one);
 //  4. a triangle that keeps more than kMaxSplatsPerTriangle points is drawn as a triangle (never
 //     slower than rasterising it), and the splats are chosen again without it.
-// Every surface point then lies within splatCoverRadius(spacing) of a splat: the splat set's
-// error, which the runtime compares with ε and whose double it draws each point's diameter at.
+// Every surface point then lies within splatCoverRadius(spacing) of a splat (with high
+// probability: the draws fill every fully covered bin only so): the splat set's error, which the
+// runtime compares with ε, and whose double each point's diameter on screen must cover.
 
 #include <ff/storage/ClusterCodec.h>
 #include <ff/storage/SceneFormat.h>
@@ -42,10 +44,15 @@ inline constexpr double kMaxSplatShare = 0.6;
 inline constexpr int kDefaultSplatSpacingDivisor = 8;
 
 /** How far a surface point may lie from its nearest splat, for stratification at `spacing`:
- *  spacing/2 (stratification) + 2 x spacing/8 (a candidate bin's diagonal, twice: the surface to
- *  its candidate, that candidate to its bin's survivor). */
+ *  spacing/2 (stratification, from a bin's survivor to a splat) + at most two bin diagonals
+ *  (spacing/8 each) and half a bin's side from a surface point to a survivor: in a bin the
+ *  surface covers fully, the survivor is in its bin (one diagonal); in a bin an edge crosses,
+ *  the point is a diagonal from the edge, the edge half a side from a sample, the sample a
+ *  diagonal from its own bin's survivor. ~0.786 x spacing. */
 constexpr float splatCoverRadius(float spacing) noexcept {
-    return 0.75f * spacing;
+    constexpr float diagonal = 1.0f / 8.0f;
+    constexpr float halfSide = diagonal / 1.7320508f / 2.0f;
+    return (0.5f + 2.0f * diagonal + halfSide) * spacing;
 }
 
 /** A cell's splats and the triangles kept with them. */
@@ -64,7 +71,8 @@ enum class SplatOutcome : std::uint8_t { Kept, NotReducing, TooLarge, Empty };
  * Stratifies `points` (Wand & Straßer §3.4.2): visits them in the order of `order` (a
  * permutation of their indices) and deletes each that another point not deleted lies within
  * `radius` of, unless it is the only such cover left of a point deleted before. Every deleted
- * point keeps a kept one within `radius`. Returns the kept indices, ascending.
+ * point keeps a kept one within `radius`. Points must be finite. Returns the kept indices,
+ * ascending.
  */
 [[nodiscard]] std::vector<std::uint32_t> stratify(
         std::span<const std::array<float, 3>> points,

@@ -77,8 +77,8 @@ enum class Payload : std::uint8_t {
  * subtree, builder/src/StandIns.h, or splats, builder/src/Splats.h) instead: when the
  * stand-in's error, in the cell's units, is less than ε pixels at the cell's nearest point
  * (times the instance's largest stretch), and for splats when their diameter on screen is at
- * least twice that (no holes); or always where `--representation simplified|splats` forces that
- * kind over the cube.
+ * least twice that (no holes); or where `--representation simplified|splats` forces that kind
+ * over the cube (splats still only without holes).
  */
 struct StandInView {
     bool allowed = false;      ///< `--representation cube` draws none
@@ -95,10 +95,9 @@ struct StandInView {
         if ((representation == Representation::Simplified && splats) ||
             (representation == Representation::Splats && !splats))
             return false;
-        if (forced)
-            return true;
         const float onScreen = error * pixelsPerUnit;
-        return onScreen < epsilonPixels && (!splats || 2.0f * onScreen <= splatPixels);
+        const bool noHoles = !splats || 2.0f * onScreen <= splatPixels;
+        return noHoles && (forced || onScreen < epsilonPixels);
     }
 };
 

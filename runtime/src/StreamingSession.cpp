@@ -538,6 +538,8 @@ public:
             std::uint32_t item = 0;
             std::uint64_t itemBit = bit;
             const auto shown = [&](std::uint32_t i, std::uint64_t from) {
+                if (mItems[i] == 0)
+                    return true; // a point cluster (splats): no triangle bits to judge it by
                 for (std::uint32_t t = 0; t < mItems[i]; ++t)
                     if (shows.triangles[from + t])
                         return true;

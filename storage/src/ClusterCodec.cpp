@@ -219,20 +219,23 @@ std::size_t encodedClusterBound(std::size_t vertexCount, std::size_t triangleCou
            (triangleCount == 0 ? 0 : meshopt_encodeIndexBufferBound(triangleCount * 3, vertexCount));
 }
 
-Result<std::size_t> encodeCluster(
+namespace {
+
+/** Either kind of cluster: triangles (`points` false, 1-512 of them) or points (no indices). */
+Result<std::size_t> encodeAnyCluster(
         std::span<const ClusterVertex> vertices,
         std::span<const std::uint8_t> indices,
+        bool points,
         std::span<std::byte> out) {
     if (vertices.empty() || vertices.size() > kMaxClusterVertices)
         return Status(
                 ErrorCode::InvalidArgument,
                 "a cluster holds 1-255 vertices, not " + std::to_string(vertices.size()));
-    if (indices.size() % 3 != 0 || indices.size() / 3 > kMaxClusterTriangles)
+    if (indices.size() % 3 != 0 || indices.size() / 3 > kMaxClusterTriangles || (indices.empty() && !points))
         return Status(
                 ErrorCode::InvalidArgument,
-                "a cluster holds 0-512 triangles, 3 indices each, not " +
+                "a cluster holds 1-512 triangles, 3 indices each, not " +
                         std::to_string(indices.size()) + " indices");
-    const bool points = indices.empty();
     if (out.size() < encodedClusterBound(vertices.size(), indices.size() / 3))
         return Status(
                 ErrorCode::InvalidArgument, "cluster output smaller than encodedClusterBound()");
@@ -299,6 +302,19 @@ Result<std::size_t> encodeCluster(
     header.indexStreamBytes = static_cast<std::uint16_t>(indexBytes);
     std::memcpy(out.data(), &header, sizeof header);
     return sizeof(ClusterHeader) + vertexBytes + indexBytes;
+}
+
+} // namespace
+
+Result<std::size_t> encodeCluster(
+        std::span<const ClusterVertex> vertices,
+        std::span<const std::uint8_t> indices,
+        std::span<std::byte> out) {
+    return encodeAnyCluster(vertices, indices, false, out);
+}
+
+Result<std::size_t> encodePointCluster(std::span<const ClusterVertex> vertices, std::span<std::byte> out) {
+    return encodeAnyCluster(vertices, {}, true, out);
 }
 
 namespace {

@@ -212,7 +212,8 @@ TEST(ClusterCodecTest, TheEncoderRefusesClustersOutsideItsLimits) {
     std::vector<std::byte> out(1 << 16);
     const Patch p = makePatch(4, 4, 1, {0, 0, 0}, 7);
     EXPECT_FALSE(encodeCluster({}, p.indices, out).isOk());
-    EXPECT_FALSE(encodeCluster({}, {}, out).isOk()); // no points either
+    EXPECT_FALSE(encodeCluster(p.vertices, {}, out).isOk()); // points are encodePointCluster's
+    EXPECT_FALSE(encodePointCluster({}, out).isOk());
     std::vector<std::uint8_t> badIndex = p.indices;
     badIndex[4] = 16;
     EXPECT_FALSE(encodeCluster(p.vertices, badIndex, out).isOk());
@@ -231,7 +232,7 @@ TEST(ClusterCodecTest, TheEncoderRefusesClustersOutsideItsLimits) {
 TEST(ClusterCodecTest, APointClusterRoundTripsWithoutAnIndexStream) {
     const Patch p = makePatch(15, 17, 53, {1000, 2000, 3000}, 21); // 255 vertices, the most
     std::vector<std::byte> bytes(encodedClusterBound(p.vertices.size(), 0));
-    const auto written = encodeCluster(p.vertices, {}, bytes);
+    const auto written = encodePointCluster(p.vertices, bytes);
     ASSERT_TRUE(written.isOk()) << written.status().toString();
     bytes.resize(*written);
     const auto info = readClusterInfo(bytes);
@@ -248,7 +249,7 @@ TEST(ClusterCodecTest, APointClusterRoundTripsWithoutAnIndexStream) {
 TEST(ClusterCodecTest, APointClusterWithTrianglesOrAnIndexStreamIsRefused) {
     const Patch p = makePatch(8, 8, 37, {1000, 2000, 3000}, 23);
     std::vector<std::byte> points(encodedClusterBound(p.vertices.size(), 0));
-    points.resize(*encodeCluster(p.vertices, {}, points));
+    points.resize(*encodePointCluster(p.vertices, points));
     std::vector<std::byte> withTriangles = points;
     withTriangles[2] = std::byte{1}; // triangleCount 1 with the points flag
     EXPECT_FALSE(readClusterInfo(withTriangles).isOk());

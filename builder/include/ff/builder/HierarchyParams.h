@@ -87,8 +87,8 @@ struct HierarchyParams {
      *  error projects below ε pixels (builder/src/StandIns.h, docs/methods.md §12). */
     bool standIns = false;
     /** Format 2 only: cells carry point splats standing in for their subtrees, spaced at
-     *  1/splatSpacing of the cell's largest side (8-16; 0: none), where no simplified stand-in
-     *  pays (builder/src/Splats.h, docs/methods.md §13). */
+     *  1/splatSpacing of the largest side of the cell's bounds (8-16; 0: none), where no
+     *  simplified stand-in pays (builder/src/Splats.h, docs/methods.md §13). */
     int splatSpacing = 0;
     /** Whether cells get stand-ins of either kind. */
     [[nodiscard]] bool anyStandIns() const noexcept { return standIns || splatSpacing > 0; }

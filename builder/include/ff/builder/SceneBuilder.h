@@ -97,7 +97,7 @@ struct BuildReport {
     std::uint64_t splatNodes = 0;          ///< v2: of standInNodes, those whose stand-in is splats
     std::uint64_t splats = 0;              ///< v2: their points (their triangles are in standInTriangles)
     std::uint64_t splatsNotReducing = 0;   ///< v2: splat sets over 0.6 x their source: not kept
-    std::uint64_t splatsTooLarge = 0;      ///< v2: splat sets over 2^22 candidates or a page limit
+    std::uint64_t splatsTooLarge = 0;      ///< v2: splat sets over 2^18 candidate bins or a page limit
     std::uint32_t maxGridBits = 0;         ///< v2: the largest prototype grid
     std::uint64_t instancedTriangles = 0;  ///< as drawn
     std::uint32_t prototypes = 0;

@@ -97,8 +97,8 @@ encodedClusterBound(std::size_t vertexCount, std::size_t triangleCount) noexcept
 
 /**
  * Encodes one cluster into `out` (at least encodedClusterBound() bytes) and returns the bytes
- * written. `indices` are 3 per triangle, each below vertices.size(); 1-255 vertices, 0-512
- * triangles (none: a point cluster, whose vertices are splats), coordinates below 2^31. Deterministic: the same input gives the same bytes.
+ * written. `indices` are 3 per triangle, each below vertices.size(); 1-255 vertices, 1-512
+ * triangles, coordinates below 2^31. Deterministic: the same input gives the same bytes.
  * For the best compression, order triangles for the vertex cache and vertices by first use
  * (meshopt_optimizeVertexCache, meshopt_optimizeVertexFetch) before.
  */
@@ -106,6 +106,11 @@ encodedClusterBound(std::size_t vertexCount, std::size_t triangleCount) noexcept
         std::span<const ClusterVertex> vertices,
         std::span<const std::uint8_t> indices,
         std::span<std::byte> out);
+
+/** Encodes a point cluster: 1-255 vertices, each a splat, no triangles and no index stream
+ *  (FORMAT.md §6.3). As encodeCluster() otherwise; `out` at least encodedClusterBound(n, 0). */
+[[nodiscard]] Result<std::size_t>
+encodePointCluster(std::span<const ClusterVertex> vertices, std::span<std::byte> out);
 
 /** Reads and checks the header of the cluster that starts `bytes`. */
 [[nodiscard]] Result<ClusterInfo> readClusterInfo(std::span<const std::byte> bytes);
