@@ -166,6 +166,31 @@ TEST(StatsCommandTest, EpsilonZeroDrawsNoCube) {
                     c["never_drawn_leaf"].get<std::uint64_t>());
 }
 
+// Format 2: which representations the cells keep, counted as `check` counts them and as the
+// build reported them.
+TEST(StatsCommandTest, FormatTwoCountsTheRepresentationsCellsKeep) {
+    const fs::path dir = freshTestDir();
+    const fs::path scene = buildScene(
+            dir, {"--generate", "sphere:triangles=200000", "--format", "2", "--stand-ins", "--splats", "8"});
+    const json report = readJsonFile(dir / "report.json");
+    const json s = stats(scene, dir);
+    ASSERT_TRUE(s.is_object());
+    EXPECT_EQ(s["format_version"], 2);
+    EXPECT_EQ(s["triangles"], report["stored_triangles"]);
+    EXPECT_EQ(s["file_bytes"], fs::file_size(scene));
+    const json& r = s["representations"];
+    EXPECT_EQ(r["splats"]["nodes"], report["splats"]["nodes"]);
+    EXPECT_EQ(r["splats"]["points"], report["splats"]["points"]);
+    EXPECT_GT(r["splats"]["nodes"].get<std::uint64_t>(), 0u);
+    EXPECT_EQ(
+            r["simplified"]["nodes"].get<std::uint64_t>() + r["splats"]["nodes"].get<std::uint64_t>(),
+            report["stand_ins"]["nodes"].get<std::uint64_t>());
+    EXPECT_GT(r["simplified"]["nodes"].get<std::uint64_t>(), 0u);
+    const ProcessResult text = runFarfield({"stats", scene.string()}, dir);
+    EXPECT_TRUE(exitedWith(text, 0)) << text.describe();
+    EXPECT_NE(text.out.find("keep splats"), std::string::npos) << text.out;
+}
+
 TEST(StatsCommandTest, DamagedFilesFailCleanlyNamingAPage) {
     const fs::path dir = freshTestDir();
     const fs::path scene = buildScene(

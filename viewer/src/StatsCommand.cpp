@@ -4,7 +4,10 @@
 
 #include <ff/bench/SceneStats.h>
 #include <ff/runtime/Units.h>
+#include <ff/storage/HierarchyCheck.h>
 #include <ff/storage/SceneFile.h>
+
+#include <nlohmann/json.hpp>
 
 #include <cstdio>
 #include <filesystem>
@@ -152,6 +155,58 @@ void printText(const SceneStats& s) {
     }
 }
 
+/** Format 2: what its hierarchy holds and which representations its cells keep, walked as
+ *  `check` walks it (storage::checkHierarchyV2). Why a cell kept none is the build's to say
+ *  (its report's stand_ins and splats). */
+Result<nlohmann::json> statsV2(const StatsArgs& args, const storage::SceneFile& scene) {
+    if (args.paths)
+        return Status(ErrorCode::Unsupported, "--paths reads format version 1 files");
+    FF_ASSIGN_OR_RETURN(const storage::HierarchySummary h, storage::checkHierarchyV2(scene, scene.source()));
+    const std::uint64_t fileBytes = std::filesystem::file_size(args.scene);
+    return nlohmann::json{
+            {"scene", args.scene},
+            {"format_version", storage::kFormatVersion2},
+            {"file_bytes", fileBytes},
+            {"pages", scene.pageCount()},
+            {"page_size", scene.pageSize()},
+            {"nodes", h.nodes},
+            {"clusters", h.clusters},
+            {"cluster_pages", h.clusterPages},
+            {"triangles", h.triangles},
+            {"bytes_per_triangle",
+             h.triangles == 0 ? 0.0 : static_cast<double>(fileBytes) / static_cast<double>(h.triangles)},
+            {"representations",
+             {{"records", h.representations},
+              {"simplified", {{"nodes", h.standIns}, {"triangles", h.standInTriangles}}},
+              {"splats", {{"nodes", h.splatSets}, {"points", h.splats}, {"triangles", h.splatTriangles}}}}}};
+}
+
+void printTextV2(const nlohmann::json& s) {
+    const auto count = [&](const nlohmann::json& j) { return static_cast<unsigned long long>(j.get<std::uint64_t>()); };
+    const nlohmann::json& r = s["representations"];
+    std::printf(
+            "%s: format 2, %s in %llu pages of %s, %.2f bytes a triangle\n",
+            s["scene"].get<std::string>().c_str(),
+            runtime::formatBytes(s["file_bytes"].get<std::uint64_t>()).c_str(),
+            count(s["pages"]),
+            runtime::formatBytes(s["page_size"].get<std::uint64_t>()).c_str(),
+            s["bytes_per_triangle"].get<double>());
+    std::printf(
+            "nodes      %llu, %llu triangles in %llu clusters (%llu cluster pages)\n",
+            count(s["nodes"]),
+            count(s["triangles"]),
+            count(s["clusters"]),
+            count(s["cluster_pages"]));
+    std::printf(
+            "stand-ins  %llu cells keep a simplified copy (%llu triangles), %llu keep splats (%llu "
+            "splats, %llu triangles); every cell has its cube and its own payload\n",
+            count(r["simplified"]["nodes"]),
+            count(r["simplified"]["triangles"]),
+            count(r["splats"]["nodes"]),
+            count(r["splats"]["points"]),
+            count(r["splats"]["triangles"]));
+}
+
 int runStats(const StatsArgs& args) {
     auto jsonFile = reserveIfNamed(args.json == "-" ? std::string() : args.json, OutputKind::Text);
     if (!jsonFile)
@@ -159,6 +214,20 @@ int runStats(const StatsArgs& args) {
     auto scene = storage::SceneFile::open(args.scene);
     if (!scene)
         return reportError("stats", scene.status().withContext(args.scene));
+    if ((*scene)->formatVersion() == storage::kFormatVersion2) {
+        Result<nlohmann::json> v2 = statsV2(args, **scene);
+        if (!v2)
+            return reportError("stats", v2.status().withContext(args.scene));
+        if (args.json == "-") {
+            std::printf("%s\n", v2->dump(2).c_str());
+            return 0;
+        }
+        printTextV2(*v2);
+        if (*jsonFile)
+            if (const Status written = (*jsonFile)->commitText(v2->dump(2) + "\n"); !written)
+                return reportError("stats", written);
+        return 0;
+    }
     Result<SceneStats> stats = collectSceneStats(**scene);
     if (!stats)
         return reportError("stats", stats.status().withContext(args.scene));
