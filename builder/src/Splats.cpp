@@ -34,9 +34,9 @@ double areaOf(const storage::PackedTriangle& t) {
 }
 
 /**
- * Points binned on a grid of cubes, for "every point within r" queries: a counting sort into a
- * dense table of cubes (at most 64 an axis: a splat set's cell spans about 2 x
- * kDefaultSplatSpacingDivisor query radii).
+ * Points binned on a grid of cubes of half the query radius, for "every point within r"
+ * queries: a counting sort into a dense table of cubes, at most 64 an axis (a cell splatted at
+ * 1/N of its side spans 4 N such cubes; beyond N = 16 they grow and queries scan more points).
  */
 class PointGrid {
 public:
@@ -54,7 +54,6 @@ public:
         // Cubes of half the radius: a query scans 5^3 of them, 1.7 x fewer points than 3^3 cubes
         // of the radius where points fill a volume (foliage).
         mCell = std::max({radius / 2.0f, extent / static_cast<float>(kMaxCells - 1), 1e-30f});
-        mReach = std::clamp<std::int64_t>(static_cast<std::int64_t>(std::ceil(std::min(radius / mCell, 64.0f))), 1, kMaxCells);
         for (std::size_t a = 0; a < 3; ++a) {
             const float cubes = (hi[a] - mOrigin[a]) / mCell; // NaN where points are not finite
             mSize[a] = cubes >= 0.0f ? std::min(kMaxCells, static_cast<std::int64_t>(std::min(cubes, 1e9f)) + 1) : 1;
@@ -77,8 +76,8 @@ public:
     void forEachWithin(const Vec3& p, float radius, Visit&& visit) const {
         const std::array<std::int64_t, 3> c = cellOf(p);
         const float r2 = radius * radius;
-        const std::int64_t r = std::max<std::int64_t>(
-                mReach, static_cast<std::int64_t>(std::ceil(std::clamp(radius / mCell, 1.0f, 64.0f))));
+        // Cubes each way that hold every point within the radius (NaN radius: one).
+        const auto r = static_cast<std::int64_t>(std::ceil(std::clamp(radius / mCell, 1.0f, static_cast<float>(kMaxCells))));
         for (std::int64_t z = std::max<std::int64_t>(c[2] - r, 0); z <= std::min(c[2] + r, mSize[2] - 1); ++z)
             for (std::int64_t y = std::max<std::int64_t>(c[1] - r, 0); y <= std::min(c[1] + r, mSize[1] - 1); ++y)
                 for (std::int64_t x = std::max<std::int64_t>(c[0] - r, 0); x <= std::min(c[0] + r, mSize[0] - 1); ++x) {
@@ -106,7 +105,6 @@ private:
 
     std::span<const Vec3> mPoints;
     float mCell = 1.0f;
-    std::int64_t mReach = 1; ///< cubes a query scans each way
     Vec3 mOrigin{};
     std::array<std::int64_t, 3> mSize{1, 1, 1};
     std::vector<std::uint32_t> mFirst;  ///< per cube, where its points start in mSorted
@@ -260,7 +258,7 @@ std::optional<Sampled> sample(
         if (out.survivors.size() > 2 * kMaxSplatBins)
             return std::nullopt; // thin geometry: far more bins crossed than its area fills
     }
-    // Stratified in a random order (the draws filled the bins most surface crosses first).
+    // Stratified in a random order (edge samples were kept in triangle order).
     std::shuffle(out.survivors.begin(), out.survivors.end(), random);
 
     std::vector<Vec3> positions(out.survivors.size());
