@@ -124,6 +124,8 @@ const std::vector<Column>& columns() {
             // Added by issue 17.
             {{"stand_ins", "cells drawn as their simplified stand-in"},
              [](T t) { return count(t.stats.standInsDrawn); }},
+            {{"splat_sets", "cells drawn as their splats"}, [](T t) { return count(t.stats.splatSetsDrawn); }},
+            {{"splats", "splats drawn (points)"}, [](T t) { return count(t.stats.splatsDrawn); }},
     };
     return table;
 }

@@ -66,7 +66,9 @@ const std::vector<std::string> kPinnedColumns = {
         "decoded_held_bytes",
         "pages_decoded_on_draw",
         // Added by issue 17.
-        "stand_ins"};
+        "stand_ins",
+        "splat_sets",
+        "splats"};
 
 TEST(FrameTelemetryTest, ColumnsAreThePinnedOnesInOrder) {
     EXPECT_EQ(telemetryColumnNames(), kPinnedColumns);
