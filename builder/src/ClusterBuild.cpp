@@ -25,6 +25,21 @@ ClusterBuildStats& ClusterBuildStats::operator+=(const ClusterBuildStats& other)
     return *this;
 }
 
+namespace {
+
+/** Trims `out` to the cluster of `written` bytes just encoded at `start` and counts it. */
+Status keepCluster(std::vector<std::byte>& out, std::size_t start, std::size_t written, ClusterBuildStats& stats) {
+    out.resize(start + written);
+    FF_ASSIGN_OR_RETURN(const storage::ClusterInfo info, storage::readClusterInfo(std::span(out).subspan(start)));
+    ++stats.clusters;
+    stats.clusterVertices += info.vertexCount;
+    stats.encodedBytes += written;
+    stats.wideClusters += info.widePositions ? 1 : 0;
+    return Status::ok();
+}
+
+} // namespace
+
 ClusterEncoder::ClusterEncoder(ClusterLimits limits)
     : mLimits(limits) {}
 
@@ -172,14 +187,7 @@ Result<ClusterBuildStats> ClusterEncoder::encode(
                         std::span(ordered).first(used),
                         std::span(narrow).first(indexCount),
                         std::span(out).subspan(start)));
-        out.resize(start + written);
-        FF_ASSIGN_OR_RETURN(
-                const storage::ClusterInfo info,
-                storage::readClusterInfo(std::span(out).subspan(start)));
-        ++stats.clusters;
-        stats.clusterVertices += used;
-        stats.encodedBytes += written;
-        stats.wideClusters += info.widePositions ? 1 : 0;
+        FF_RETURN_IF_ERROR(keepCluster(out, start, written, stats));
     }
     return stats;
 }
@@ -207,15 +215,8 @@ Result<ClusterBuildStats> ClusterEncoder::encodePoints(
         FF_ASSIGN_OR_RETURN(
                 const std::size_t written,
                 storage::encodePointCluster(std::span(mVertices).subspan(first, count), std::span(out).subspan(start)));
-        out.resize(start + written);
-        FF_ASSIGN_OR_RETURN(
-                const storage::ClusterInfo info,
-                storage::readClusterInfo(std::span(out).subspan(start)));
-        ++stats.clusters;
-        stats.clusterVertices += count;
+        FF_RETURN_IF_ERROR(keepCluster(out, start, written, stats));
         stats.points += count;
-        stats.encodedBytes += written;
-        stats.wideClusters += info.widePositions ? 1 : 0;
     }
     return stats;
 }
