@@ -11,6 +11,7 @@
 
 #include <array>
 #include <cmath>
+#include <cstdio>
 #include <numeric>
 #include <random>
 #include <vector>
@@ -126,9 +127,11 @@ TEST(SplatsTest, ASplatSetCoversItsSurfaceWithinThePromisedRadius) {
             worst = std::max(worst, nearest);
         }
     EXPECT_LE(worst, splatCoverRadius(spacing)) << worst;
+    std::printf("farthest from a splat: %.3f x the spacing; %zu splats\n", worst / spacing, splats.points.size());
     // And the stratification thins: a cover of discs of spacing/2 (~2.6/spacing² by the paper)
     // in a few hundred points, not the thousands of candidates.
     const double perArea = static_cast<double>(splats.points.size()) * spacing * spacing / (kCells * kCells);
+    std::printf("%.2f splats per spacing squared\n", perArea);
     EXPECT_LT(perArea, 4.6) << splats.points.size() << " splats"; // the paper's worst case
 }
 
