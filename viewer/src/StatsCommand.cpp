@@ -155,12 +155,13 @@ void printText(const SceneStats& s) {
     }
 }
 
-/** Format 2: what its hierarchy holds and which representations its cells keep, walked as
- *  `check` walks it (storage::checkHierarchyV2). Why a cell kept none is the build's to say
+/** Format 2: what its hierarchy holds and which representations its cells keep, verified and
+ *  walked as `check` does (every page's checksum, then storage::checkHierarchyV2). Why a cell kept none is the build's to say
  *  (its report's stand_ins and splats). */
 Result<nlohmann::json> statsV2(const StatsArgs& args, const storage::SceneFile& scene) {
     if (args.paths)
         return Status(ErrorCode::Unsupported, "--paths reads format version 1 files");
+    FF_RETURN_IF_ERROR(scene.verifyAll());
     FF_ASSIGN_OR_RETURN(const storage::HierarchySummary h, storage::checkHierarchyV2(scene, scene.source()));
     const std::uint64_t fileBytes = std::filesystem::file_size(args.scene);
     return nlohmann::json{
