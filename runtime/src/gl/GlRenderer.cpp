@@ -796,7 +796,7 @@ BatchVisibility Renderer::visibleParts(const DrawList& batch) {
                 clusterBit += c.count / 3;
             }
             s.indexedCommands.clear();
-            s.pointCommands.clear(); // splats have no triangle bits: the oracle keeps them out
+            s.pointCommands.clear(); // splats have no triangle bits to set (the oracle keeps them all)
         }
         bit += draw.triangles;
     }
