@@ -269,7 +269,8 @@ void BackToFrontTraversal::emitGeometry(const detail::PayloadRun& run, std::size
              run.count,
              mActive[active].listIndex,
              run.triangles,
-             run.payloadBytes});
+             run.payloadBytes,
+             run.pointPixels});
     flushIfFull();
 }
 

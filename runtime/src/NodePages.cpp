@@ -123,6 +123,7 @@ std::size_t mergeGeometryDraws(std::vector<GeometryDraw>& draws) {
                 last.first + last.count == draws[i].first) {
                 last.count += draws[i].count;
                 last.triangles += draws[i].triangles;
+                last.pointPixels = std::max(last.pointPixels, draws[i].pointPixels); // never holes
                 continue;
             }
         }
@@ -404,6 +405,9 @@ Fetch NodePages::collectPayload(
                 continue;
             if (admit(runsOf(priority, out, kind), uploads, out) == Fetch::Ready) {
                 drawn = kind;
+                if (kind == Payload::Splats)
+                    for (PayloadRun& run : out)
+                        run.pointPixels = view.splatDiameter(found->parameter);
                 return Fetch::Ready;
             }
             // Asked for; until it is resident (or if its page failed) the cell is refined as

@@ -17,6 +17,7 @@
 
 #include <glm/glm.hpp>
 
+#include <algorithm>
 #include <array>
 #include <span>
 #include <string>
@@ -99,6 +100,11 @@ struct StandInView {
         const bool noHoles = !splats || 2.0f * onScreen <= splatPixels;
         return noHoles && (forced || onScreen < epsilonPixels);
     }
+    /** The diameter splats of `error` are drawn at here: twice their error on screen (no
+     *  holes, no more bleed past the surface's outline than that), at least a pixel. */
+    [[nodiscard]] float splatDiameter(float error) const noexcept {
+        return std::clamp(2.0f * error * pixelsPerUnit, 1.0f, splatPixels);
+    }
 };
 
 /** Whether a frame draws its cubes as area-weighted points (`--cube-draw`), in every pass. */
@@ -154,6 +160,7 @@ struct PayloadRun {
     std::uint32_t triangles;
     std::uint32_t payloadBytes;
     std::uint32_t points = 0; ///< splats among the items (point clusters' vertices)
+    float pointPixels = 0.0f; ///< GeometryDraw::pointPixels
 };
 
 enum class Fetch { Ready, Missing };

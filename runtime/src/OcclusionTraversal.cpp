@@ -881,7 +881,7 @@ void OcclusionTraversal::Impl::drawRuns(std::uint32_t transform) {
         stats->trianglesDrawn += run.triangles;
         stats->splatsDrawn += run.points;
         list.geometry.push_back(
-                {run.page, run.payload, run.first, run.count, index, run.triangles, run.payloadBytes});
+                {run.page, run.payload, run.first, run.count, index, run.triangles, run.payloadBytes, run.pointPixels});
     }
     if (list.bytes() >= frame->budgets.drawBatchBytes)
         flush();

@@ -560,7 +560,8 @@ public:
                              item - first,
                              draw.transform,
                              kept,
-                             draw.payloadBytes});
+                             draw.payloadBytes,
+                             draw.pointPixels});
             }
             bit += draw.triangles;
         }

@@ -47,7 +47,8 @@ CLI::Option* addRepresentationOption(CLI::App& cmd, runtime::Representation& rep
 
 void addSplatOptions(CLI::App& cmd, runtime::SplatStyle& style) {
     cmd.add_option("--splat-size", style.pixels,
-                   "Splats' diameter in pixels (1-3; a cell's splats are drawn where this covers twice their error)")
+                   "Largest splat diameter in pixels (1-3): a cell's splats are drawn where this covers twice their "
+                   "error on screen, and at twice that error")
             ->check(CLI::Range(1.0f, 3.0f))
             ->capture_default_str();
     cmd.add_option_function<std::string>(

@@ -132,8 +132,8 @@ struct Renderer::Impl {
     // Per-batch buffers, a ring of them: rewriting a buffer the GPU may still be reading (the
     // batch before, when an occlusion query flushed it) would wait for that batch to finish.
     struct BatchBuffers {
-        GLuint transforms = 0, normalMatrices = 0, localEyes = 0, indirect = 0, cubes = 0;
-        GLsizeiptr transformsCap = 0, normalsCap = 0, eyesCap = 0, indirectCap = 0, cubesCap = 0;
+        GLuint transforms = 0, normalMatrices = 0, localEyes = 0, indirect = 0, cubes = 0, pointDraws = 0;
+        GLsizeiptr transformsCap = 0, normalsCap = 0, eyesCap = 0, indirectCap = 0, cubesCap = 0, pointDrawsCap = 0;
     };
     static constexpr std::size_t kBatchBufferSets = 4;
     std::array<BatchBuffers, kBatchBufferSets> ring;
@@ -144,7 +144,15 @@ struct Renderer::Impl {
     std::vector<IndirectCommand> commands;
     std::vector<IndexedCommand> indexedCommands;
     std::vector<IndirectCommand> pointCommands; ///< format 2's point clusters (splats)
-    SplatStyle splats;                          ///< how the batch draws them
+    /** Per point command (its baseInstance): the transform and the diameter in pixels, read by
+     *  pointVao's per-instance attributes. */
+    struct PointDraw {
+        GLuint transform;
+        float pixels;
+    };
+    std::vector<PointDraw> pointDraws;
+    GLuint pointVao = 0;  ///< geometryVao's vertices, with PointDraw per draw
+    SplatStyle splats;    ///< how the batch draws them
     std::vector<glm::mat4> normalScratch;
     std::vector<glm::vec4> eyeScratch;
     // Render target.
@@ -192,11 +200,11 @@ Renderer::Impl::~Impl() {
     const GLuint buffers[] = {arena, iota};
     glDeleteBuffers(2, buffers);
     for (const BatchBuffers& set : ring) {
-        const GLuint perBatch[] = {set.transforms, set.normalMatrices, set.localEyes, set.indirect, set.cubes};
-        glDeleteBuffers(5, perBatch);
+        const GLuint perBatch[] = {set.transforms, set.normalMatrices, set.localEyes, set.indirect, set.cubes, set.pointDraws};
+        glDeleteBuffers(6, perBatch);
     }
-    const GLuint vaos[] = {geometryVao, cubeVao};
-    glDeleteVertexArrays(2, vaos);
+    const GLuint vaos[] = {geometryVao, cubeVao, pointVao};
+    glDeleteVertexArrays(3, vaos);
     glDeleteProgram(geometryProgram);
     glDeleteProgram(roundSplatProgram);
     glDeleteProgram(cubeProgram);
@@ -272,13 +280,14 @@ Result<std::unique_ptr<Renderer>> Renderer::create(
     impl->arena = buffers[0];
     impl->iota = buffers[1];
     for (Impl::BatchBuffers& set : impl->ring) {
-        GLuint perBatch[5];
-        glGenBuffers(5, perBatch);
+        GLuint perBatch[6];
+        glGenBuffers(6, perBatch);
         set.transforms = perBatch[0];
         set.normalMatrices = perBatch[1];
         set.localEyes = perBatch[2];
         set.indirect = perBatch[3];
         set.cubes = perBatch[4];
+        set.pointDraws = perBatch[5];
     }
     bufferData(impl->arena, impl->slotBytes * impl->slotCount, nullptr, GL_DYNAMIC_DRAW);
 
@@ -300,6 +309,27 @@ Result<std::unique_ptr<Renderer>> Renderer::create(
     glVertexAttribBinding(3, 1);
     glVertexBindingDivisor(1, 1);
     glEnableVertexAttribArray(3);
+
+    // Splats: the same vertices; per draw (baseInstance = its index in pointDraws) its
+    // transform and diameter.
+    glGenVertexArrays(1, &impl->pointVao);
+    glBindVertexArray(impl->pointVao);
+    glVertexAttribFormat(0, 3, GL_FLOAT, GL_FALSE, offsetof(storage::PackedVertex, position));
+    glVertexAttribIFormat(1, 2, GL_SHORT, offsetof(storage::PackedVertex, normalOct));
+    glVertexAttribFormat(2, 4, GL_UNSIGNED_BYTE, GL_TRUE, offsetof(storage::PackedVertex, color));
+    for (GLuint a = 0; a < 3; ++a) {
+        glVertexAttribBinding(a, 0);
+        glEnableVertexAttribArray(a);
+    }
+    glVertexAttribIFormat(3, 1, GL_UNSIGNED_INT, offsetof(Impl::PointDraw, transform));
+    glVertexAttribFormat(4, 1, GL_FLOAT, GL_FALSE, offsetof(Impl::PointDraw, pixels));
+    for (GLuint a = 3; a < 5; ++a) {
+        glVertexAttribBinding(a, 1);
+        glEnableVertexAttribArray(a);
+    }
+    glVertexBindingDivisor(1, 1);
+    glBindVertexArray(0);
+    impl->bindArena();
 
     // Cubes: one CubeDraw per instance.
     glGenVertexArrays(1, &impl->cubeVao);
@@ -481,6 +511,10 @@ void Renderer::Impl::bindArena() {
     glBindVertexBuffer(0, arena, 0, sizeof(storage::PackedVertex));
     if (clustered)
         glBindBuffer(GL_ELEMENT_ARRAY_BUFFER, arena); // VAO state
+    if (pointVao != 0) {
+        glBindVertexArray(pointVao);
+        glBindVertexBuffer(0, arena, 0, sizeof(storage::PackedVertex));
+    }
     glBindVertexArray(0);
 }
 
@@ -494,7 +528,9 @@ bool Renderer::Impl::appendClusterCommands(const GeometryDraw& draw, std::uint32
     for (const storage::IndexedCluster& cluster : clusters) {
         if (cluster.info.points()) {
             pointCommands.push_back(
-                    {cluster.info.vertexCount, 1, slot * verticesPerSlot + cluster.firstVertex, draw.transform});
+                    {cluster.info.vertexCount, 1, slot * verticesPerSlot + cluster.firstVertex,
+                     static_cast<GLuint>(pointDraws.size())});
+            pointDraws.push_back({draw.transform, draw.pointPixels > 0.0f ? draw.pointPixels : splats.pixels});
             continue;
         }
         indexedCommands.push_back(
@@ -514,7 +550,7 @@ void Renderer::Impl::useGeometryProgram(GLuint program, const glm::mat4& viewPro
                 storage::kLightDirection[1], storage::kLightDirection[2]);
     glUniform1f(glGetUniformLocation(program, "uAmbient"), storage::kAmbient);
     glUniform1f(glGetUniformLocation(program, "uDiffuse"), storage::kDiffuse);
-    glUniform1f(glGetUniformLocation(program, "uPointSize"), splats.pixels * static_cast<float>(frameSupersample));
+    glUniform1f(glGetUniformLocation(program, "uPointScale"), static_cast<float>(frameSupersample));
 }
 
 void Renderer::Impl::drawBatch(const glm::mat4& viewProjection) {
@@ -540,8 +576,13 @@ void Renderer::Impl::drawBatch(const glm::mat4& viewProjection) {
     else if (!clustered)
         glMultiDrawArraysIndirect(GL_TRIANGLES, nullptr, static_cast<GLsizei>(commands.size()), 0);
     if (!pointCommands.empty()) {
+        const auto drawBytes = static_cast<GLsizeiptr>(pointDraws.size() * sizeof(PointDraw));
+        ensureCapacity(set.pointDraws, set.pointDrawsCap, drawBytes);
+        bufferSubData(set.pointDraws, 0, drawBytes, pointDraws.data());
         if (splats.round)
             useGeometryProgram(roundSplatProgram, viewProjection);
+        glBindVertexArray(pointVao);
+        glBindVertexBuffer(1, set.pointDraws, 0, sizeof(PointDraw));
         glEnable(GL_PROGRAM_POINT_SIZE);
         glMultiDrawArraysIndirect(GL_POINTS, reinterpret_cast<const void*>(static_cast<std::uintptr_t>(bytes)),
                                   static_cast<GLsizei>(pointCommands.size()), 0);
@@ -550,6 +591,7 @@ void Renderer::Impl::drawBatch(const glm::mat4& viewProjection) {
     commands.clear();
     indexedCommands.clear();
     pointCommands.clear();
+    pointDraws.clear();
     ++batch;
 }
 
@@ -566,6 +608,7 @@ Status Renderer::Impl::drawGeometry(const DrawList& list, const glm::mat4& viewP
             commands.clear();
             indexedCommands.clear();
             pointCommands.clear();
+            pointDraws.clear();
             return slot.status();
         }
         slotBatch[*slot] = batch;
@@ -575,6 +618,7 @@ Status Renderer::Impl::drawGeometry(const DrawList& list, const glm::mat4& viewP
         else if (!appendClusterCommands(draw, *slot)) {
             indexedCommands.clear();
             pointCommands.clear();
+            pointDraws.clear();
             return Status(ErrorCode::Corrupt, "page " + std::to_string(draw.page) + ": not a cached cluster page");
         }
     }
@@ -797,6 +841,7 @@ BatchVisibility Renderer::visibleParts(const DrawList& batch) {
             }
             s.indexedCommands.clear();
             s.pointCommands.clear(); // splats have no triangle bits to set (the oracle keeps them all)
+            s.pointDraws.clear();
         }
         bit += draw.triangles;
     }

@@ -20,13 +20,14 @@ layout(location = 0) in vec3 aPosition;
 layout(location = 1) in ivec2 aNormalOct;  // snorm16, octahedral; (-32768, -32768): unlit
 layout(location = 2) in vec4 aColor;       // sRGB8 rgb, linear alpha
 layout(location = 3) in uint aTransform;   // per draw, from baseInstance
+layout(location = 4) in float aPointSize;  // splats only: their diameter in output pixels
 layout(std430, binding = 0) readonly buffer Transforms { mat4 transforms[]; };
 layout(std430, binding = 1) readonly buffer NormalMatrices { mat4 normalMatrices[]; };
 uniform mat4 uViewProjection;
 uniform vec3 uLightDirection;
 uniform float uAmbient;
 uniform float uDiffuse;
-uniform float uPointSize; // splats' diameter in pixels (points only)
+uniform float uPointScale; // render-target pixels an output pixel spans (supersampling)
 out vec3 vColor;
 
 vec3 decodeOct(vec2 e) {
@@ -50,7 +51,7 @@ void main() {
         light = uAmbient + uDiffuse * abs(dot(n, uLightDirection));
     }
     vColor = srgbToLinear(aColor.rgb) * light;
-    gl_PointSize = uPointSize;
+    gl_PointSize = aPointSize * uPointScale;
 }
 )";
 

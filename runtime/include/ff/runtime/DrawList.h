@@ -24,6 +24,9 @@ struct GeometryDraw {
     std::uint32_t transform;
     std::uint32_t triangles;    ///< the triangles the run draws (format 1: `count`)
     std::uint32_t payloadBytes; ///< the bytes `payload` spans
+    /** The diameter in pixels its point clusters (splats) are drawn at: twice their error on
+     *  screen at their cell's nearest point, at least 1 (0: the list's SplatStyle::pixels). */
+    float pointPixels = 0.0f;
 };
 
 /** A color cube: a box in its transform's frame with six premultiplied RGBA8 faces. */

@@ -40,11 +40,11 @@ enum class Representation {
     Splats,
 };
 
-/** How splats are drawn (`--splat-size`, `--splat-shape`): opaque, depth-tested points of a
- *  fixed size; a cell's splats are drawn only where their diameter on screen covers twice
- *  their error, so they leave no holes. */
+/** How splats are drawn (`--splat-size`, `--splat-shape`): opaque, depth-tested points; a
+ *  cell's splats are drawn only where a diameter of `pixels` covers twice their error on
+ *  screen (no holes), and at that twice (at least a pixel). */
 struct SplatStyle {
-    float pixels = 2.0f; ///< the points' diameter on screen
+    float pixels = 2.0f; ///< the largest diameter on screen
     bool round = true;   ///< discs; false: squares
 };
 
