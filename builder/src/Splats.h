@@ -24,7 +24,6 @@
 
 #include <array>
 #include <cstdint>
-#include <optional>
 #include <span>
 #include <vector>
 
@@ -34,8 +33,9 @@ namespace ff::builder {
 inline constexpr double kSplatSafety = 3.0;
 /** A triangle that would keep more splats than this is drawn as a triangle instead. */
 inline constexpr std::uint32_t kMaxSplatsPerTriangle = 3;
-/** Splat sets with more candidate bins to fill are not built: memory (~0.6 KB a bin's survivor
- *  and its neighbours) and time (some 3 x 12 candidates a bin at this size, ~0.1 µs each). */
+/** Splat sets with more candidate bins to fill are not built: memory (a bin's survivor, its
+ *  attributes and cover count, ~80 bytes) and time (3 ln n draws a bin, 37 at this size, and
+ *  the stratification's neighbour searches, thousands a survivor where a volume fills bins). */
 inline constexpr std::size_t kMaxSplatBins = std::size_t{1} << 18;
 /** A splat set must cost at most this share of the triangles it replaces (points and kept
  *  triangles together), as a stand-in must. */

@@ -57,6 +57,19 @@ void bufferSubData(GLuint buffer, GLintptr offset, GLsizeiptr bytes, const void*
     glBufferSubData(GL_COPY_WRITE_BUFFER, offset, bytes, data);
 }
 
+/** The bound vertex array's attributes 0-2: PackedVertex (20 bytes) from binding 0. */
+void formatPackedVertices() {
+    glVertexAttribFormat(0, 3, GL_FLOAT, GL_FALSE, offsetof(storage::PackedVertex, position));
+    // As integers: the shader tells the unlit code (-32768, -32768) apart from -32767, which a
+    // normalized attribute maps to the same -1.
+    glVertexAttribIFormat(1, 2, GL_SHORT, offsetof(storage::PackedVertex, normalOct));
+    glVertexAttribFormat(2, 4, GL_UNSIGNED_BYTE, GL_TRUE, offsetof(storage::PackedVertex, color));
+    for (GLuint a = 0; a < 3; ++a) {
+        glVertexAttribBinding(a, 0);
+        glEnableVertexAttribArray(a);
+    }
+}
+
 // Grows a buffer to at least `bytes` (contents are rewritten every frame, so none are kept).
 void ensureCapacity(GLuint buffer, GLsizeiptr& capacity, GLsizeiptr bytes) {
     if (bytes <= capacity)
@@ -295,15 +308,7 @@ Result<std::unique_ptr<Renderer>> Renderer::create(
     glGenVertexArrays(1, &impl->geometryVao);
     impl->bindArena();
     glBindVertexArray(impl->geometryVao);
-    glVertexAttribFormat(0, 3, GL_FLOAT, GL_FALSE, offsetof(storage::PackedVertex, position));
-    // As integers: the shader tells the unlit code (-32768, -32768) apart from -32767, which a
-    // normalized attribute maps to the same -1.
-    glVertexAttribIFormat(1, 2, GL_SHORT, offsetof(storage::PackedVertex, normalOct));
-    glVertexAttribFormat(2, 4, GL_UNSIGNED_BYTE, GL_TRUE, offsetof(storage::PackedVertex, color));
-    for (GLuint a = 0; a < 3; ++a) {
-        glVertexAttribBinding(a, 0);
-        glEnableVertexAttribArray(a);
-    }
+    formatPackedVertices();
     // The transform index: an instanced attribute over 0, 1, 2, ... offset by baseInstance.
     glVertexAttribIFormat(3, 1, GL_UNSIGNED_INT, 0);
     glVertexAttribBinding(3, 1);
@@ -314,13 +319,7 @@ Result<std::unique_ptr<Renderer>> Renderer::create(
     // transform and diameter.
     glGenVertexArrays(1, &impl->pointVao);
     glBindVertexArray(impl->pointVao);
-    glVertexAttribFormat(0, 3, GL_FLOAT, GL_FALSE, offsetof(storage::PackedVertex, position));
-    glVertexAttribIFormat(1, 2, GL_SHORT, offsetof(storage::PackedVertex, normalOct));
-    glVertexAttribFormat(2, 4, GL_UNSIGNED_BYTE, GL_TRUE, offsetof(storage::PackedVertex, color));
-    for (GLuint a = 0; a < 3; ++a) {
-        glVertexAttribBinding(a, 0);
-        glEnableVertexAttribArray(a);
-    }
+    formatPackedVertices();
     glVertexAttribIFormat(3, 1, GL_UNSIGNED_INT, offsetof(Impl::PointDraw, transform));
     glVertexAttribFormat(4, 1, GL_FLOAT, GL_FALSE, offsetof(Impl::PointDraw, pixels));
     for (GLuint a = 3; a < 5; ++a) {
