@@ -212,6 +212,10 @@ void BackToFrontTraversal::visit(
                     mServices->uploads,
                     mRuns,
                     drawn) == Fetch::Ready;
+    if (drawn == detail::Payload::Cube) {
+        emitCube(node, ref, active);
+        return;
+    }
     const bool standIn = drawn != detail::Payload::Own;
     std::span<const std::byte> childPage;
     const bool childrenReady =

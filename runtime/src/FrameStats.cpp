@@ -18,6 +18,7 @@ std::string FrameStats::toJson() const {
             {"stand_ins_drawn", standInsDrawn},
             {"splat_sets_drawn", splatSetsDrawn},
             {"splats_drawn", splatsDrawn},
+            {"representation_fallbacks", representationFallbacks},
             {"geometry_draws", geometryDraws},
             {"pages_uploaded", pagesUploaded},
             {"nodes_deferred", nodesDeferred},

@@ -126,6 +126,8 @@ const std::vector<Column>& columns() {
              [](T t) { return count(t.stats.standInsDrawn); }},
             {{"splat_sets", "cells drawn as their splats"}, [](T t) { return count(t.stats.splatSetsDrawn); }},
             {{"splats", "splats drawn (points)"}, [](T t) { return count(t.stats.splatsDrawn); }},
+            {{"fallbacks", "cells drawn as the nearest kept kind to a forced one"},
+             [](T t) { return count(t.stats.representationFallbacks); }},
     };
     return table;
 }

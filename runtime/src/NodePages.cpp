@@ -149,6 +149,8 @@ bool holds(const storage::RepresentationRecord& r, Payload payload) noexcept {
         return r.kind == storage::RepresentationKind::Clusters && storage::isStandIn(r);
     case Payload::Splats:
         return r.kind == storage::RepresentationKind::Splats;
+    case Payload::Cube:
+        return false; // not a representation record: the node's own cube
     }
     return false;
 }
@@ -398,25 +400,59 @@ Fetch NodePages::collectPayload(
         }
         out.clear();
         for (const Payload kind : {Payload::Simplified, Payload::Splats}) {
-            const auto found = std::find_if(
-                    mRepresentations.begin(), mRepresentations.end(),
-                    [kind](const storage::RepresentationRecord& r) { return holds(r, kind); });
-            if (found == mRepresentations.end() || !view.accepts(kind, found->parameter))
+            const storage::RepresentationRecord* kept = keptOf(kind);
+            if (kept == nullptr || !view.accepts(kind, kept->parameter))
                 continue;
-            if (admit(runsOf(priority, out, kind), uploads, out) == Fetch::Ready) {
+            if (drawStandIn(kind, *kept, view, priority, uploads, out) == Fetch::Ready) {
                 drawn = kind;
-                if (kind == Payload::Splats)
-                    for (PayloadRun& run : out)
-                        run.pointPixels = view.splatDiameter(found->parameter);
                 return Fetch::Ready;
             }
-            // Asked for; until it is resident (or if its page failed) the cell is refined as
-            // without it, so what was drawn finer does not turn into a cube meanwhile.
-            out.clear();
+        }
+        if (view.forced && keptOf(view.forcedKind()) == nullptr) {
+            // The forced kind is not kept here: the nearest kept one, counted. (Kept splats too
+            // coarse to draw without holes refine instead: their children's are finer.)
+            ++mStats->representationFallbacks;
+            for (const Payload kind : {Payload::Simplified, Payload::Splats}) {
+                const storage::RepresentationRecord* kept = keptOf(kind);
+                if (kept == nullptr || !view.acceptsInstead(kind, kept->parameter))
+                    continue;
+                if (drawStandIn(kind, *kept, view, priority, uploads, out) == Fetch::Ready) {
+                    drawn = kind;
+                    return Fetch::Ready;
+                }
+            }
+            drawn = Payload::Cube; // a forced view's cell has one
+            return Fetch::Ready;
         }
         return admit(runsOf(priority, out, Payload::Own), uploads, out); // the table read once
     }
     return collectGeometry(node, priority, uploads, out);
+}
+
+const storage::RepresentationRecord* NodePages::keptOf(Payload kind) const {
+    const auto found = std::find_if(
+            mRepresentations.begin(), mRepresentations.end(),
+            [kind](const storage::RepresentationRecord& r) { return holds(r, kind); });
+    return found == mRepresentations.end() ? nullptr : &*found;
+}
+
+Fetch NodePages::drawStandIn(
+        Payload kind,
+        const storage::RepresentationRecord& kept,
+        const StandInView& view,
+        float priority,
+        IUploadGate& uploads,
+        std::vector<PayloadRun>& out) {
+    if (admit(runsOf(priority, out, kind), uploads, out) != Fetch::Ready) {
+        // Asked for; until it is resident (or if its page failed) the cell is refined as
+        // without it, so what was drawn finer does not turn into a cube meanwhile.
+        out.clear();
+        return Fetch::Missing;
+    }
+    if (kind == Payload::Splats)
+        for (PayloadRun& run : out)
+            run.pointPixels = view.splatDiameter(kept.parameter);
+    return Fetch::Ready;
 }
 
 Fetch NodePages::admit(Fetch result, IUploadGate& uploads, std::vector<PayloadRun>& out) {

@@ -71,6 +71,9 @@ enum class Payload : std::uint8_t {
     Own,        ///< its own triangles (and its children, drawn apart)
     Simplified, ///< its simplified stand-in, instead of its whole subtree
     Splats,     ///< its splats, instead of its whole subtree
+    /** its cube: a kind `--representation` forces that the cell did not keep, nor the other
+     *  stand-in (the nearest kept one is what the ε rule would draw there) */
+    Cube,
 };
 
 /**
@@ -90,7 +93,7 @@ struct StandInView {
     float splatPixels = 0.0f; ///< the splats' diameter on screen
 
     [[nodiscard]] bool accepts(Payload kind, float error) const noexcept {
-        if (!allowed || kind == Payload::Own)
+        if (!allowed || kind == Payload::Own || kind == Payload::Cube)
             return false;
         const bool splats = kind == Payload::Splats;
         if ((representation == Representation::Simplified && splats) ||
@@ -99,6 +102,18 @@ struct StandInView {
         const float onScreen = error * pixelsPerUnit;
         const bool noHoles = !splats || 2.0f * onScreen <= splatPixels;
         return noHoles && (forced || onScreen < epsilonPixels);
+    }
+    /** The forced kind, where one is (`--representation simplified|splats`). */
+    [[nodiscard]] Payload forcedKind() const noexcept {
+        return representation == Representation::Splats ? Payload::Splats : Payload::Simplified;
+    }
+    /** Whether a forced cell that did not keep the forced kind may draw its other stand-in of
+     *  `error`: the nearest kept representation, as both promise an error in pixels and the
+     *  cube does not. Splats still only without holes. */
+    [[nodiscard]] bool acceptsInstead(Payload kind, float error) const noexcept {
+        if (!forced || kind == Payload::Own || kind == Payload::Cube || kind == forcedKind())
+            return false;
+        return kind != Payload::Splats || 2.0f * error * pixelsPerUnit <= splatPixels;
     }
     /** The diameter splats of `error` are drawn at here: twice their error on screen (no
      *  holes, no more bleed past the surface's outline than that), at least a pixel. */
@@ -215,7 +230,9 @@ public:
     /** What a refined cell draws: the runs of the first of its stand-ins (simplified, then
      *  splats) that `view` accepts and whose pages are all resident and admitted (`drawn` says
      *  which: draw them instead of its own payload and children), else collectGeometry()'s
-     *  (`drawn` Own; the stand-in's pages stay asked for). */
+     *  (`drawn` Own; the stand-in's pages stay asked for). Where `view` forces a kind the cell
+     *  did not keep, the nearest kept one: its other stand-in, else its cube (`drawn` Cube, no
+     *  runs); counted in FrameStats. */
     Fetch collectPayload(
             const storage::NodeRecord& node,
             const StandInView& view,
@@ -252,6 +269,17 @@ private:
             const storage::NodeRecord& node, float priority, std::vector<PayloadRun>& out, Payload which);
     /** The runs of mRepresentations (as readRepresentations() left them) of `which`. */
     Fetch runsOf(float priority, std::vector<PayloadRun>& out, Payload which);
+    /** The record of mRepresentations that holds `kind`, or null. */
+    [[nodiscard]] const storage::RepresentationRecord* keptOf(Payload kind) const;
+    /** `kept`'s runs into `out` if all are resident and admitted (splats sized for `view`);
+     *  else `out` empty and Missing (the pages stay asked for). */
+    Fetch drawStandIn(
+            Payload kind,
+            const storage::RepresentationRecord& kept,
+            const StandInView& view,
+            float priority,
+            IUploadGate& uploads,
+            std::vector<PayloadRun>& out);
     /** Drops the runs `uploads` refuses (counted; Missing then). */
     Fetch admit(Fetch result, IUploadGate& uploads, std::vector<PayloadRun>& out);
 

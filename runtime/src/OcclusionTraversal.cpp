@@ -175,8 +175,9 @@ struct OcclusionTraversal::Impl {
     /** Queues `runs` (a cell's payload) for drawing under `transform`. */
     void drawRuns(std::uint32_t transform);
     /** Expands a visible cell: draws its own geometry and hands each child to `child`. Deferred
-     *  (nothing done) when its pages are not all resident or a child is unreadable: its cube
-     *  stands in for it (pass 2). */
+     *  (nothing done) when its pages are not all resident or a child is unreadable, or when a
+     *  forced representation it did not keep falls back to its cube: its cube stands in for it
+     *  (pass 2). */
     template <typename Child>
     Expanded expandCell(
             const storage::NodeRecord& node,
@@ -908,6 +909,10 @@ OcclusionTraversal::Impl::Expanded OcclusionTraversal::Impl::expandCell(
                     services->uploads,
                     runs,
                     drawn) == Fetch::Ready;
+    if (drawn == detail::Payload::Cube) {
+        sawCube(node, transform); // pass 2 draws it
+        return Expanded::Deferred;
+    }
     const bool standIn = drawn != detail::Payload::Own;
     std::span<const std::byte> childPage;
     const bool childrenReady = standIn || node.childCount == 0 ||

@@ -68,7 +68,8 @@ const std::vector<std::string> kPinnedColumns = {
         // Added by issue 17.
         "stand_ins",
         "splat_sets",
-        "splats"};
+        "splats",
+        "fallbacks"};
 
 TEST(FrameTelemetryTest, ColumnsAreThePinnedOnesInOrder) {
     EXPECT_EQ(telemetryColumnNames(), kPinnedColumns);

@@ -1,6 +1,7 @@
 // Splats drawn (builder/src/Splats.h, docs/methods.md §13): opaque, depth-tested points whose
 // diameter covers twice their error, so a closed surface shows no background through them at
-// any splat size or shape; `--representation` forces each kind a file holds; ε = 0 draws none.
+// any splat size or shape; `--representation` forces each kind a file holds (a cell without it
+// falls back to the nearest kept kind); ε = 0 draws none.
 
 #include "FarfieldProcess.h"
 
@@ -44,13 +45,17 @@ struct Drawn {
     std::uint64_t standIns = 0;
     std::uint64_t splatSets = 0;
     std::uint64_t splats = 0;
+    std::uint64_t fallbacks = 0; ///< cells drawn as the nearest kept kind to the forced one
+    std::uint64_t cubes = 0;
 };
 
 Drawn drawnIn(const fs::path& stats) {
     const nlohmann::json frame = readJsonFile(stats)["frames"].back();
     return {frame["stand_ins_drawn"].get<std::uint64_t>(),
             frame["splat_sets_drawn"].get<std::uint64_t>(),
-            frame["splats_drawn"].get<std::uint64_t>()};
+            frame["splats_drawn"].get<std::uint64_t>(),
+            frame["representation_fallbacks"].get<std::uint64_t>(),
+            frame["cubes_drawn"].get<std::uint64_t>()};
 }
 
 fs::path buildSphere(const fs::path& dir, const std::vector<std::string>& flags) {
@@ -100,6 +105,20 @@ TEST(SplatRenderingTest, SplatsLeaveNoHolesOnAClosedSurface) {
         EXPECT_EQ(holePixels(punched, reference), 9u);
     }
     EXPECT_GT(splatsDrawn, 2000u) << "the views drew few splats";
+
+    // The file keeps no simplified copy: forcing one, cells below ε fall back to their splats
+    // where those leave no holes, else to their cube, counted.
+    const fs::path stats = dir / "forced_simplified.json";
+    (void)renderToImage(
+            scene,
+            dir / "forced_simplified.png",
+            {"--size", "480x360", "--distance", "24", "--elevation", "20", "--epsilon", "4",
+             "--representation", "simplified", "--stats", stats.string()},
+            dir);
+    const Drawn forced = drawnIn(stats);
+    EXPECT_EQ(forced.standIns, 0u);
+    EXPECT_GT(forced.splatSets, 0u) << "no cell fell back to its splats";
+    EXPECT_GT(forced.fallbacks, forced.splatSets) << "no cell fell back to its cube";
 }
 
 TEST(SplatRenderingTest, EachRepresentationCanBeForcedAndEpsilonZeroDrawsNone) {
@@ -108,25 +127,43 @@ TEST(SplatRenderingTest, EachRepresentationCanBeForcedAndEpsilonZeroDrawsNone) {
     // it keeps splats, drawn from afar.
     const fs::path scene = buildSphere(dir, {"--stand-ins", "--splats", "8"});
     const std::vector<std::string> common = {"--size", "320x240", "--coverage-alpha", "--distance", "48"};
-    const auto drawnWith = [&](const std::vector<std::string>& extra, const std::string& label) {
+    const auto drawnWith = [&](const std::vector<std::string>& extra,
+                               const std::string& label,
+                               const std::string& distance = "48") {
         const fs::path stats = dir / (label + ".json");
         std::vector<std::string> args = common;
+        args[4] = distance;
         args.insert(args.end(), extra.begin(), extra.end());
         args.insert(args.end(), {"--stats", stats.string()});
         renderToImage(scene, dir / (label + ".png"), args, dir);
         return drawnIn(stats);
     };
     const Drawn cube = drawnWith({"--representation", "cube", "--epsilon", "4"}, "cube");
-    EXPECT_EQ(cube.standIns + cube.splatSets, 0u);
+    EXPECT_EQ(cube.standIns + cube.splatSets + cube.fallbacks, 0u);
+    // A forced kind a cell did not keep falls back to the nearest kept one (the other stand-in,
+    // else the cube), counted: every cell drawn as the other kind is among the fallbacks.
     const Drawn simplified = drawnWith({"--representation", "simplified", "--epsilon", "4"}, "simplified");
     EXPECT_GT(simplified.standIns, 0u);
-    EXPECT_EQ(simplified.splatSets, 0u);
+    EXPECT_LE(simplified.splatSets, simplified.fallbacks);
     const Drawn splats = drawnWith({"--representation", "splats", "--epsilon", "4"}, "splats");
     EXPECT_GT(splats.splatSets, 0u);
     EXPECT_GT(splats.splats, 0u);
-    EXPECT_EQ(splats.standIns, 0u);
+    EXPECT_LE(splats.standIns, splats.fallbacks);
     const Drawn automatic = drawnWith({"--epsilon", "4"}, "auto");
     EXPECT_GT(automatic.standIns + automatic.splatSets, 0u);
+    EXPECT_EQ(automatic.fallbacks, 0u);
+
+    // Nearer, with cells below ε that keep a simplified copy but no splats (the root alone
+    // keeps splats) and leaves that keep neither: forced splats fall back to each, counted.
+    const Drawn nearer = drawnWith(
+            {"--representation", "splats", "--epsilon", "16"}, "splats_nearer", "12");
+    EXPECT_GT(nearer.standIns, 0u) << "no cell fell back to its simplified copy";
+    EXPECT_GT(nearer.fallbacks, nearer.standIns) << "no cell fell back to its cube";
+    EXPECT_GE(nearer.cubes, nearer.fallbacks - nearer.standIns);
+    const Drawn occluding = drawnWith(
+            {"--representation", "splats", "--epsilon", "16", "--occlusion", "on"}, "splats_nearer_occlusion", "12");
+    EXPECT_EQ(occluding.fallbacks, nearer.fallbacks) << "the front-to-back walk falls back alike";
+    EXPECT_EQ(occluding.standIns, nearer.standIns);
 
     // ε = 0 draws every triangle, whatever is forced.
     std::vector<std::string> full = common;

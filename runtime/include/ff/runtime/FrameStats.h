@@ -26,6 +26,9 @@ struct FrameStats {
      *  triangles are among trianglesDrawn. */
     std::uint64_t splatSetsDrawn = 0;
     std::uint64_t splatsDrawn = 0;
+    /** Cells where `--representation` forced a kind they did not keep, drawn as the nearest
+     *  kept one instead (their other stand-in, else their cube). */
+    std::uint64_t representationFallbacks = 0;
     std::uint64_t geometryDraws = 0; ///< draw commands for geometry (merged page runs)
     std::uint64_t pagesUploaded = 0; ///< geometry pages sent to the GPU this frame
     /** Cells drawn coarser than the ε rule wanted because pages were not resident ("debt"). */
