@@ -21,6 +21,10 @@ namespace ff::builder {
 
 namespace {
 
+StandInKinds standInKinds(const HierarchyParams& params) {
+    return {params.standIns, params.splatSpacing, params.measureStandIns};
+}
+
 LeafShapeV2 leafShapeV2(const HierarchyParams& params, const storage::PositionGrid& grid, unsigned threads) {
     LeafShapeV2 shape;
     shape.leafTriangles = params.leafTriangles();
@@ -123,7 +127,7 @@ Result<ChunkOutput> buildChunk(
                         &rootSource,
                         out.standInCounts,
                         {maxStandInTriangles(pageSize), false},
-                        {params.standIns, params.splatSpacing}));
+                        standInKinds(params)));
         if (rootSource.triangles.size() > kMaxCarriedStandInSource)
             rootSource = StandInSource{{}, 0.0f, false};
     }
@@ -242,7 +246,7 @@ Result<PrototypeBuildResult> PrototypeBuilder::writeInMemoryV2(
     input.grid = &encoding.grid;
     input.rootParent = {{boundsMin.x, boundsMin.y, boundsMin.z}, {boundsMax.x, boundsMax.y, boundsMax.z}};
     input.threads = mThreads;
-    input.standIns = {mParams.standIns, mParams.splatSpacing};
+    input.standIns = standInKinds(mParams);
     FF_RETURN_IF_ERROR(shapeLeavesV2(built.nodes, all, leafShapeV2(mParams, encoding.grid, mThreads)));
     PrototypeBuildResult result;
     result.summary = std::move(built.summary);
@@ -304,7 +308,7 @@ Result<PrototypeBuildResult> PrototypeBuilder::finishChunkedV2(
     input.rootParent = rootParent;
     input.placed = placed;
     input.threads = mThreads;
-    input.standIns = {mParams.standIns, mParams.splatSpacing};
+    input.standIns = standInKinds(mParams);
     FF_ASSIGN_OR_RETURN(
             const SubtreeV2Result written,
             writeSubtreeV2(mWriter, *mNodePageTable, std::move(nodes), ownTriangles, input));

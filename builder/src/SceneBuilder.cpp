@@ -157,6 +157,7 @@ Result<std::unique_ptr<SceneBuilder>> SceneBuilder::create(
         impl->report.clusterNodes = options.hierarchy.clusterNodes;
         impl->report.standIns = options.hierarchy.standIns;
         impl->report.splatSpacing = options.hierarchy.splatSpacing;
+        impl->report.standInsMeasured = options.hierarchy.anyStandIns() && options.hierarchy.measureStandIns;
     }
     impl->report.spillCodec = std::string(spillCodecName(options.spillCodec));
     return std::unique_ptr<SceneBuilder>(new SceneBuilder(std::move(impl)));
@@ -335,6 +336,10 @@ Result<BuildReport> SceneBuilder::finish() {
         report.splats += built.standInClusters.points;
         report.splatsNotReducing += built.standInCounts.splatsNotReducing;
         report.splatsTooLarge += built.standInCounts.splatsTooLarge;
+        report.standInsNotPaying += built.standInCounts.notPaying;
+        report.standInErrorsRaised += built.standInCounts.errorsRaised;
+        report.splatsNotPaying += built.standInCounts.splatsNotPaying;
+        report.splatsOverSimplified += built.standInCounts.splatsOverSimplified;
         summaries.push_back(std::move(built.summary));
         names.push_back(proto.name);
         report.storedTriangles += built.record.triangleCount;
@@ -501,13 +506,18 @@ std::string buildReportJson(const BuildReport& r) {
               {"bytes", r.standInBytes},
               {"not_reducing", r.standInsNotReducing},
               {"too_small", r.standInsTooSmall},
-              {"too_large", r.standInsTooLarge}}},
+              {"too_large", r.standInsTooLarge},
+              {"choice", r.standInsMeasured ? "measured" : "rule"},
+              {"not_paying", r.standInsNotPaying},
+              {"errors_raised", r.standInErrorsRaised}}},
             {"splats",
              {{"spacing", r.splatSpacing},
               {"nodes", r.splatNodes},
               {"points", r.splats},
               {"not_reducing", r.splatsNotReducing},
-              {"too_large", r.splatsTooLarge}}},
+              {"too_large", r.splatsTooLarge},
+              {"not_paying", r.splatsNotPaying},
+              {"chosen_over_simplified", r.splatsOverSimplified}}},
             {"nodes", r.nodes},
             {"leaf_nodes", r.leafNodes},
             {"depth", r.maxDepth},

@@ -2,6 +2,7 @@
 
 #include "ParallelFor.h"
 #include "Splats.h"
+#include "StandInChoice.h"
 #include "StandInError.h"
 
 #include <ff/storage/Assert.h>
@@ -27,6 +28,107 @@ static_assert(sizeof(WeldKey) == 20); // no padding: meshopt compares its bytes
 
 bool isInstance(const BuildNode& node) {
     return node.kind == static_cast<std::uint8_t>(storage::NodeKind::Instance);
+}
+
+/** What became of a cell that could have had a stand-in (StandInCounts). */
+enum class Outcome : std::uint8_t { None, Kept, NotReducing, TooSmall, TooLarge, NotPaying };
+
+/** A cell's stand-in, if it keeps one, and why (not). */
+struct CellChoice {
+    std::optional<StandIn> standIn;
+    Outcome outcome = Outcome::None;
+    SplatOutcome splats = SplatOutcome::Empty;
+    /** The measure's counts: splatsNotPaying, errorsRaised, splatsOverSimplified. */
+    StandInCounts counts;
+};
+
+/**
+ * A cell's candidates from `source` of the kinds asked for, and the one it keeps: by measured
+ * error and cost (StandInChoice.h), or, with kinds.measured off, its simplified copy where one
+ * pays, else its splats.
+ */
+CellChoice chooseStandIn(
+        const BuildNode& node,
+        const StandInSource& source,
+        const storage::PositionGrid& grid,
+        const StandInLimits& limits,
+        const StandInKinds& kinds,
+        std::uint64_t seed) {
+    CellChoice choice;
+    std::optional<StandInMeasure> measure;
+    if (kinds.measured)
+        measure.emplace(source.triangles, node.boundsMin, node.boundsMax);
+
+    std::optional<StandIn> simplified;
+    MeasuredStandIn simplifiedMeasured;
+    if (kinds.simplified) {
+        simplified = simplifySource(source.triangles, source.error, grid);
+        choice.outcome = simplified ? Outcome::Kept : Outcome::NotReducing;
+        if (simplified && simplified->triangles.size() > limits.maxTriangles) {
+            simplified.reset();
+            choice.outcome = Outcome::TooLarge; // its source goes up whole
+        }
+        if (simplified && measure) {
+            simplifiedMeasured = measure->measure(*simplified);
+            simplified->error = simplifiedMeasured.error;
+            if (!simplifiedMeasured.pays) {
+                simplified.reset();
+                choice.outcome = Outcome::NotPaying;
+            }
+        }
+    }
+
+    // Splats where no simplified copy pays; measured, also where they could beat it (their
+    // error is at least their source's plus their cover radius).
+    const glm::vec3 extent = node.boundsMax - node.boundsMin;
+    const float spacing = std::max({extent.x, extent.y, extent.z}) / static_cast<float>(std::max(kinds.splatSpacing, 1));
+    const bool trySplats =
+            kinds.splatSpacing > 0 &&
+            (!simplified ||
+             (measure && source.error + splatCoverRadius(spacing) < simplified->error * kStandInErrorTie));
+    std::optional<StandIn> splatted;
+    MeasuredStandIn splatsMeasured;
+    bool splatsNotPaying = false;
+    if (trySplats) {
+        SplatSet splats;
+        choice.splats = splatSource(source.triangles, spacing, source.error, grid, seed, splats);
+        // A point costs about what a triangle does in a page.
+        if (choice.splats == SplatOutcome::Kept &&
+            splats.points.size() + splats.triangles.size() > limits.maxTriangles)
+            choice.splats = SplatOutcome::TooLarge;
+        if (choice.splats == SplatOutcome::Kept) {
+            splatted = StandIn{
+                    std::move(splats.triangles), splats.error, StandInKind::Splats, std::move(splats.points)};
+            if (measure) {
+                splatsMeasured = measure->measure(*splatted);
+                splatted->error = splatsMeasured.error;
+                if (!splatsMeasured.pays) {
+                    splatted.reset();
+                    splatsNotPaying = true;
+                    ++choice.counts.splatsNotPaying;
+                }
+            }
+        }
+    }
+
+    const bool splatsWin =
+            splatted && simplified &&
+            !prefer(simplifiedMeasured, elementsOf(*simplified), splatsMeasured, elementsOf(*splatted));
+    choice.counts.splatsOverSimplified += splatsWin ? 1u : 0u;
+    const MeasuredStandIn& kept = splatsWin || !simplified ? splatsMeasured : simplifiedMeasured;
+    if (splatsWin || (splatted && !simplified))
+        choice.standIn = std::move(splatted);
+    else if (simplified)
+        choice.standIn = std::move(simplified);
+    if (choice.standIn) {
+        choice.outcome = Outcome::Kept;
+        choice.counts.errorsRaised += kept.raised > 0 ? 1u : 0u;
+    } else if (!kinds.simplified) {
+        choice.outcome = splatsNotPaying                             ? Outcome::NotPaying
+                         : choice.splats == SplatOutcome::TooLarge ? Outcome::TooLarge
+                                                                   : Outcome::NotReducing;
+    }
+    return choice;
 }
 
 } // namespace
@@ -150,9 +252,9 @@ Result<std::vector<std::optional<StandIn>>> buildStandIns(
 
     std::vector<std::optional<StandIn>> standIns(nodes.size());
     std::vector<StandInSource> sources(nodes.size());
-    enum class Outcome : std::uint8_t { None, Kept, NotReducing, TooSmall, TooLarge };
     std::vector<Outcome> outcomes(nodes.size(), Outcome::None);
     std::vector<SplatOutcome> splatOutcomes(nodes.size(), SplatOutcome::Empty);
+    std::vector<StandInCounts> measuredCounts(nodes.size());
     for (std::size_t d = byDepth.size(); d-- > 0;) {
         const std::vector<std::uint32_t>& level = byDepth[d];
         FF_RETURN_IF_ERROR(parallelFor(level.size(), threads, [&] {
@@ -201,38 +303,15 @@ Result<std::vector<std::optional<StandIn>>> buildStandIns(
                     outcomes[n] = Outcome::TooSmall;
                     return Status::ok();
                 }
-                if (kinds.simplified) {
-                    standIns[n] = simplifySource(source.triangles, source.error, grid);
-                    outcomes[n] = standIns[n] ? Outcome::Kept : Outcome::NotReducing;
-                    if (standIns[n] && standIns[n]->triangles.size() > limits.maxTriangles) {
-                        standIns[n].reset();
-                        outcomes[n] = Outcome::TooLarge; // its source goes up whole
-                    }
-                    if (standIns[n]) {
+                CellChoice choice = chooseStandIn(node, source, grid, limits, kinds, 0x5eed0000ull + n);
+                outcomes[n] = choice.outcome;
+                splatOutcomes[n] = choice.splats;
+                measuredCounts[n] = choice.counts;
+                if (choice.standIn) {
+                    standIns[n] = std::move(choice.standIn);
+                    if (standIns[n]->kind == StandInKind::Simplified) {
                         source.triangles = standIns[n]->triangles;
                         source.error = standIns[n]->error;
-                        return Status::ok();
-                    }
-                }
-                if (kinds.splatSpacing > 0) {
-                    const glm::vec3 extent = node.boundsMax - node.boundsMin;
-                    const float spacing =
-                            std::max({extent.x, extent.y, extent.z}) / static_cast<float>(kinds.splatSpacing);
-                    SplatSet splats;
-                    splatOutcomes[n] =
-                            splatSource(source.triangles, spacing, source.error, grid, 0x5eed0000ull + n, splats);
-                    // A point costs about what a triangle does in a page.
-                    if (splatOutcomes[n] == SplatOutcome::Kept &&
-                        splats.points.size() + splats.triangles.size() > limits.maxTriangles)
-                        splatOutcomes[n] = SplatOutcome::TooLarge;
-                    if (splatOutcomes[n] == SplatOutcome::Kept) {
-                        standIns[n] = StandIn{
-                                std::move(splats.triangles), splats.error, StandInKind::Splats,
-                                std::move(splats.points)};
-                        outcomes[n] = Outcome::Kept;
-                    } else if (!kinds.simplified) {
-                        outcomes[n] = splatOutcomes[n] == SplatOutcome::TooLarge ? Outcome::TooLarge
-                                                                                 : Outcome::NotReducing;
                     }
                 }
                 return Status::ok(); // the parent splats or simplifies this source whole
@@ -250,11 +329,14 @@ Result<std::vector<std::optional<StandIn>>> buildStandIns(
         counts.splatsNotReducing += splatOutcomes[n] == SplatOutcome::NotReducing ? 1u : 0u;
         counts.splatsTooLarge += splatOutcomes[n] == SplatOutcome::TooLarge ? 1u : 0u;
     }
+    for (const StandInCounts& measured : measuredCounts)
+        counts += measured;
     for (const Outcome outcome : outcomes) {
         counts.kept += outcome == Outcome::Kept ? 1 : 0;
         counts.notReducing += outcome == Outcome::NotReducing ? 1 : 0;
         counts.tooSmall += outcome == Outcome::TooSmall ? 1 : 0;
         counts.tooLarge += outcome == Outcome::TooLarge ? 1 : 0;
+        counts.notPaying += outcome == Outcome::NotPaying ? 1 : 0;
     }
     return standIns;
 }

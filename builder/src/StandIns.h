@@ -54,12 +54,14 @@ struct StandIn {
     std::vector<storage::PackedVertex> points; ///< Splats: the splats
 };
 
-/** Which stand-ins a hierarchy's cells may get. Where both are asked for, a cell keeps its
- *  simplified copy where one pays (it reduces and its shading holds), else its splats. */
+/** Which stand-ins a hierarchy's cells may get, and how a cell chooses among them. */
 struct StandInKinds {
     bool simplified = true;
     /** Splats at 1/splatSpacing of the cell's largest side (Splats.h); 0: none. */
     int splatSpacing = 0;
+    /** Each candidate's error measured against its source, and the one that pays best kept
+     *  (StandInChoice.h); off: by rule, a simplified copy where one reduces, else splats. */
+    bool measured = true;
 };
 
 /** Sources no larger than this are simplified (meshopt's memory is ~100 bytes a triangle). */
@@ -110,7 +112,19 @@ struct StandInCounts {
     std::uint64_t splats = 0;      ///< of `kept`, cells that keep splats (no simplification paid)
     std::uint64_t splatsNotReducing = 0; ///< splat sets over kMaxSplatShare: not kept
     std::uint64_t splatsTooLarge = 0;    ///< splat sets over kMaxSplatBins candidate bins or a page limit
+    /** Measured (StandInChoice.h): cells whose candidates kept their shape only where the cell
+     *  spans under kMinStandInSpanPixels (none kept; counted once, like notReducing), splat sets
+     *  that did not, kept stand-ins whose error the measure raised, and cells where both kinds
+     *  paid and splats were kept. */
+    std::uint64_t notPaying = 0;
+    std::uint64_t splatsNotPaying = 0;
+    std::uint64_t errorsRaised = 0;
+    std::uint64_t splatsOverSimplified = 0;
     StandInCounts& operator+=(const StandInCounts& other) noexcept {
+        notPaying += other.notPaying;
+        splatsNotPaying += other.splatsNotPaying;
+        errorsRaised += other.errorsRaised;
+        splatsOverSimplified += other.splatsOverSimplified;
         splats += other.splats;
         splatsNotReducing += other.splatsNotReducing;
         splatsTooLarge += other.splatsTooLarge;

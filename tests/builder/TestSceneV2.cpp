@@ -483,6 +483,33 @@ TEST(SceneV2Test, StandInsHalveWhatTheySimplifyAndTheirErrorsGrowUpTheTree) {
     }
 }
 
+TEST(SceneV2Test, MeasuredChoiceKeepsOnlyTheStandInsThatKeepTheirShape) {
+    // The city's buildings are boxes of a dozen triangles: their simplified copies keep a small
+    // quadric error but lose walls and roofs seen from the cell's sides. By rule they are kept;
+    // measured, they keep their shape only where their cell spans under two pixels.
+    const fs::path dir = freshTestDir();
+    const RecordingSink scene = generate("city");
+    BuildOptions rule = v2Options();
+    rule.hierarchy.standIns = true;
+    rule.hierarchy.measureStandIns = false;
+    BuildOptions measured = rule;
+    measured.hierarchy.measureStandIns = true;
+    const BuildReport byRule = buildOrFail(scene, dir / "rule.ffs", rule);
+    const BuildReport byMeasure = buildOrFail(scene, dir / "measured.ffs", measured);
+    EXPECT_FALSE(byRule.standInsMeasured);
+    EXPECT_TRUE(byMeasure.standInsMeasured);
+    EXPECT_GT(byRule.standInNodes, 0u);
+    EXPECT_EQ(byRule.standInsNotPaying, 0u);
+    EXPECT_GT(byMeasure.standInsNotPaying, 0u);
+    EXPECT_LT(byMeasure.standInNodes, byRule.standInNodes);
+    EXPECT_LT(byMeasure.fileBytes, byRule.fileBytes);
+    auto file = openOrFail(dir / "measured.ffs");
+    ASSERT_NE(file, nullptr);
+    const Result<storage::HierarchySummary> walked = storage::checkHierarchyV2(*file, file->source());
+    ASSERT_TRUE(walked.isOk()) << walked.status().toString();
+    EXPECT_EQ(walked->standIns, byMeasure.standInNodes);
+}
+
 void reseal(std::vector<std::byte>& bytes, std::uint32_t pageSize, std::uint64_t page) {
     const std::size_t base = static_cast<std::size_t>(page) * pageSize;
     const std::uint64_t sum = XXH3_64bits(bytes.data() + base, pageSize - 8);

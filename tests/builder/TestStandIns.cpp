@@ -94,6 +94,8 @@ TEST(StandInTest, TheLimitsDropStandInsTooLargeForAPageAndLeavesBelowTheTop) {
     std::vector<BuildNode> nodes(1);
     nodes[0].kind = static_cast<std::uint8_t>(storage::NodeKind::Cell);
     nodes[0].triangleCount = triangles.size();
+    nodes[0].boundsMin = {0.0f, 0.0f, 0.0f};
+    nodes[0].boundsMax = {kCells, 0.0f, kCells};
     const auto build = [&](const StandInLimits& limits, StandInCounts& counts) {
         return buildStandIns(nodes, triangles, grid, {}, 1, nullptr, counts, limits).value();
     };

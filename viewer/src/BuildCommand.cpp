@@ -46,6 +46,7 @@ struct BuildArgs {
     bool clusterNodes = false;
     bool standIns = false;
     int splatSpacing = 0;
+    std::string standInChoice = "measured";
     bool quiet = false;
 };
 
@@ -88,6 +89,7 @@ int runBuild(const BuildArgs& args) {
     options.hierarchy.clusterNodes = args.clusterNodes;
     options.hierarchy.standIns = args.standIns;
     options.hierarchy.splatSpacing = args.splatSpacing;
+    options.hierarchy.measureStandIns = args.standInChoice == "measured";
     options.hierarchy.bakeResolution = args.bakeResolution;
     options.hierarchy.bakeInnerDirect = args.bakeInner == "direct";
     options.hierarchy.cubeCost = args.cubeCost;
@@ -234,8 +236,14 @@ CommandRunner addBuildCommand(CLI::App& app) {
     cmd->add_option("--splats", args->splatSpacing,
                     "--format 2: give cells point splats standing in for their subtree, spaced at 1/N of the cell's "
                     "largest side (8-16; Wand & Strasser), drawn where their error is below --epsilon pixels; with "
-                    "--stand-ins, only where no simplified copy pays (docs/methods.md, \"Splats\")")
+                    "--stand-ins, a cell keeps the kind --stand-in-choice picks (docs/methods.md, \"Splats\")")
             ->check(CLI::Range(1, 64));
+    cmd->add_option("--stand-in-choice", args->standInChoice,
+                    "--format 2 with --stand-ins or --splats: measured (default) draws each candidate and the geometry it "
+                    "stands for from the cell's six sides, raises its error where they differ and keeps the one that "
+                    "pays best; rule keeps a simplified copy where one reduces, else splats (docs/methods.md, "
+                    "\"Choosing per cell\")")
+            ->check(CLI::IsMember({"measured", "rule"}));
     cmd->add_flag("-q,--quiet", args->quiet, "No progress or summary on stderr");
     return [args]() { return runBuild(*args); };
 }

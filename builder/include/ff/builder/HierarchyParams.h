@@ -90,6 +90,11 @@ struct HierarchyParams {
      *  1/splatSpacing of the largest side of the cell's bounds (8-16; 0: none), where no
      *  simplified stand-in pays (builder/src/Splats.h, docs/methods.md §13). */
     int splatSpacing = 0;
+    /** Format 2 only: a cell's candidate stand-ins are drawn from its six face directions beside
+     *  the geometry they stand for, their errors raised where the images differ, and the one
+     *  that pays best kept (builder/src/StandInChoice.h, docs/methods.md §14); false: by rule (a
+     *  simplified copy where one reduces, else splats, at their geometric errors). */
+    bool measureStandIns = true;
     /** Whether cells get stand-ins of either kind. */
     [[nodiscard]] bool anyStandIns() const noexcept { return standIns || splatSpacing > 0; }
     /** clusterLeafTriangles, or its default for clusterNodes. */

@@ -1,0 +1,78 @@
+#pragma once
+
+// A cell seen from its six face directions on a small orthographic raster: how the builder
+// compares a stand-in with the geometry it stands for (issue 17: the choice per node by
+// measured error). Depth-tested, shaded with a light from the eye (a vertex's sRGB colour times
+// 0.25 + 0.75 |n·view|; unlit vertices keep their colour), Gouraud-interpolated, no blending:
+// what the runtime draws, at the size where a stand-in is first drawn.
+
+#include <ff/storage/SceneFormat.h>
+
+#include <glm/vec3.hpp>
+
+#include <array>
+#include <cstdint>
+#include <span>
+#include <vector>
+
+namespace ff::builder {
+
+class CellViews {
+public:
+    /** Six views of the box [boundsMin, boundsMax], each `resolution` pixels across its largest
+     *  side (the box fits every view). */
+    CellViews(const glm::vec3& boundsMin, const glm::vec3& boundsMax, int resolution);
+
+    /** Draws triangles, conservatively: a pixel is covered where a triangle overlaps it, so
+     *  geometry thinner than a pixel seen edge-on still shows (non-finite and degenerate ones
+     *  are skipped). */
+    void drawTriangles(std::span<const storage::PackedTriangle> triangles);
+    /** Draws splats as discs of `diameter` (box units) around each point, at least the pixel
+     *  each point falls in, as the runtime's points are at least a pixel. */
+    void drawSplats(std::span<const storage::PackedVertex> points, float diameter);
+
+    [[nodiscard]] int resolution() const noexcept { return mResolution; }
+    /** The size of a pixel in box units. */
+    [[nodiscard]] float pixelSize() const noexcept { return mPixel; }
+
+    struct Pixel {
+        float depth = 0.0f; ///< along the view, larger nearer the eye
+        std::array<std::uint8_t, 3> shade{};
+        bool covered = false;
+    };
+    static constexpr int kViews = 6;
+    /** View `v` (0-5: +x, -x, +y, -y, +z, -z) row by row. */
+    [[nodiscard]] std::span<const Pixel> view(int v) const noexcept { return mViews[static_cast<std::size_t>(v)]; }
+
+private:
+    struct Projected {
+        float x = 0.0f;
+        float y = 0.0f;
+        float depth = 0.0f;
+    };
+    [[nodiscard]] Projected project(int view, const std::array<float, 3>& p) const noexcept;
+    void plot(int view, int x, int y, float depth, const std::array<float, 3>& shade);
+    /** The pixels the segment ab passes through (a triangle seen edge-on). */
+    void drawEdge(
+            int view,
+            const Projected& a,
+            const Projected& b,
+            const std::array<float, 3>& shadeA,
+            const std::array<float, 3>& shadeB);
+
+    glm::vec3 mMin;
+    float mPixel = 1.0f;
+    int mResolution = 0;
+    std::array<std::vector<Pixel>, kViews> mViews;
+};
+
+/**
+ * How differently `a` and `b` (views of the same box at the same resolution) show it: the share
+ * of the pixels either covers, over the six views, that one covers where the other covers no
+ * pixel within one (a shift of a pixel is what a stand-in's error may move an outline by at the
+ * size it is drawn from), or shades more than `shadeStep` 8-bit steps apart from every covered
+ * pixel of the other within one. 0 when neither covers anything.
+ */
+[[nodiscard]] double viewMismatch(const CellViews& a, const CellViews& b, float shadeStep);
+
+} // namespace ff::builder

@@ -1,0 +1,75 @@
+#include "StandInChoice.h"
+
+#include "CellViews.h"
+#include "StandInError.h"
+
+#include <algorithm>
+#include <cmath>
+
+namespace ff::builder {
+
+StandInMeasure::StandInMeasure(
+        std::span<const storage::PackedTriangle> source,
+        const glm::vec3& boundsMin,
+        const glm::vec3& boundsMax)
+    : mSource(source), mMin(boundsMin), mMax(boundsMax) {
+    const glm::vec3 extent = boundsMax - boundsMin;
+    mSide = std::max({extent.x, extent.y, extent.z});
+}
+
+StandInMeasure::~StandInMeasure() = default;
+
+CellViews StandInMeasure::blankViews(int span) const {
+    // The cell `span` pixels across, and a pixel of margin on every side, so what bleeds past
+    // its bounds is seen.
+    const float pixel = mSide / static_cast<float>(span);
+    const glm::vec3 lo = mMin - glm::vec3(pixel);
+    return CellViews(lo, lo + glm::vec3(pixel * static_cast<float>(span + 2)), span + 2);
+}
+
+const CellViews& StandInMeasure::sourceViews(int span) {
+    auto found = mSourceViews.find(span);
+    if (found == mSourceViews.end()) {
+        found = mSourceViews.emplace(span, blankViews(span)).first;
+        found->second.drawTriangles(mSource);
+    }
+    return found->second;
+}
+
+MeasuredStandIn StandInMeasure::measure(const StandIn& candidate) {
+    MeasuredStandIn m;
+    m.error = candidate.error;
+    if (!(mSide > 0.0f) || !std::isfinite(m.error))
+        return m; // no surface to stand in for, or no promise to keep
+    for (;;) {
+        const float span = m.error > 0.0f ? mSide / m.error : INFINITY;
+        if (!(span >= kMinStandInSpanPixels))
+            return m; // does not pay
+        const int pixels = static_cast<int>(std::min(std::ceil(span), static_cast<float>(kMaxMeasureSpan)));
+        CellViews views = blankViews(pixels);
+        views.drawTriangles(candidate.triangles);
+        // The runtime draws a splat twice its error across on screen (no holes).
+        views.drawSplats(candidate.points, 2.0f * m.error);
+        m.mismatch = viewMismatch(sourceViews(pixels), views, kShadingColourStep);
+        if (m.mismatch <= kMaxStandInMismatch) {
+            m.pays = true;
+            return m;
+        }
+        m.error = std::max(2.0f * m.error, mSide / static_cast<float>(kMaxMeasureSpan));
+        ++m.raised;
+    }
+}
+
+bool prefer(const MeasuredStandIn& a, std::size_t aElements, const MeasuredStandIn& b, std::size_t bElements) {
+    if (a.error * kStandInErrorTie < b.error)
+        return true;
+    if (b.error * kStandInErrorTie < a.error)
+        return false;
+    return aElements <= bElements;
+}
+
+std::size_t elementsOf(const StandIn& standIn) noexcept {
+    return standIn.triangles.size() + standIn.points.size();
+}
+
+} // namespace ff::builder
