@@ -192,20 +192,21 @@ void CellViews::drawSplats(std::span<const storage::PackedVertex> points, float 
 
 namespace {
 
-/** Whether `a`'s pixel (x, y), if covered, has a covered pixel of `b` within one that shades
- *  within `step` of it. */
+/** Whether `a`'s pixel (x, y), if covered, has a covered pixel of `b` within `reach` that
+ *  shades within `step` of it. */
 bool matched(
         std::span<const CellViews::Pixel> a,
         std::span<const CellViews::Pixel> b,
         int resolution,
         int x,
         int y,
+        int reach,
         float step) {
     const CellViews::Pixel& p = a[static_cast<std::size_t>(y * resolution + x)];
     if (!p.covered)
         return true;
-    for (int dy = -1; dy <= 1; ++dy)
-        for (int dx = -1; dx <= 1; ++dx) {
+    for (int dy = -reach; dy <= reach; ++dy)
+        for (int dx = -reach; dx <= reach; ++dx) {
             const int nx = x + dx;
             const int ny = y + dy;
             if (nx < 0 || ny < 0 || nx >= resolution || ny >= resolution)
@@ -224,7 +225,7 @@ bool matched(
 
 } // namespace
 
-double viewMismatch(const CellViews& a, const CellViews& b, float shadeStep) {
+double viewMismatch(const CellViews& a, const CellViews& b, int reach, float shadeStep) {
     FF_ASSERT(a.resolution() == b.resolution());
     const int r = a.resolution();
     std::uint64_t either = 0;
@@ -238,7 +239,7 @@ double viewMismatch(const CellViews& a, const CellViews& b, float shadeStep) {
                 if (!va[i].covered && !vb[i].covered)
                     continue;
                 ++either;
-                if (!matched(va, vb, r, x, y, shadeStep) || !matched(vb, va, r, x, y, shadeStep))
+                if (!matched(va, vb, r, x, y, reach, shadeStep) || !matched(vb, va, r, x, y, reach, shadeStep))
                     ++mismatched;
             }
     }

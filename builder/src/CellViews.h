@@ -69,10 +69,10 @@ private:
 /**
  * How differently `a` and `b` (views of the same box at the same resolution) show it: the share
  * of the pixels either covers, over the six views, that one covers where the other covers no
- * pixel within one (a shift of a pixel is what a stand-in's error may move an outline by at the
- * size it is drawn from), or shades more than `shadeStep` 8-bit steps apart from every covered
- * pixel of the other within one. 0 when neither covers anything.
+ * pixel within `reach` pixels (in x and y: the shift a stand-in's error allows), or shades more
+ * than `shadeStep` 8-bit steps apart from every covered pixel of the other within `reach`. 0
+ * when neither covers anything.
  */
-[[nodiscard]] double viewMismatch(const CellViews& a, const CellViews& b, float shadeStep);
+[[nodiscard]] double viewMismatch(const CellViews& a, const CellViews& b, int reach, float shadeStep);
 
 } // namespace ff::builder

@@ -45,12 +45,17 @@ MeasuredStandIn StandInMeasure::measure(const StandIn& candidate) {
         const float span = m.error > 0.0f ? mSide / m.error : INFINITY;
         if (!(span >= kMinStandInSpanPixels))
             return m; // does not pay
-        const int pixels = static_cast<int>(std::min(std::ceil(span), static_cast<float>(kMaxMeasureSpan)));
+        // Where a pixel is its error, a pixel's shift is what the error allows; drawn finer (a
+        // small span, kMinMeasureSpan), the shift it allows is as many pixels as the error spans.
+        const int pixels = static_cast<int>(std::clamp(
+                std::ceil(span), static_cast<float>(kMinMeasureSpan), static_cast<float>(kMaxMeasureSpan)));
+        const float pixel = mSide / static_cast<float>(pixels);
+        const int reach = std::max(1, static_cast<int>(std::floor(m.error / pixel)));
         CellViews views = blankViews(pixels);
         views.drawTriangles(candidate.triangles);
         // The runtime draws a splat twice its error across on screen (no holes).
         views.drawSplats(candidate.points, 2.0f * m.error);
-        m.mismatch = viewMismatch(sourceViews(pixels), views, kShadingColourStep);
+        m.mismatch = viewMismatch(sourceViews(pixels), views, reach, kShadingColourStep);
         if (m.mismatch <= kMaxStandInMismatch) {
             m.pays = true;
             return m;

@@ -5,7 +5,7 @@
 // below ε pixels, so at ε = 1 it is first drawn where a pixel spans its error. The builder
 // checks the promise there: it draws the candidate and its source (what the cell stands for)
 // from the cell's six face directions at that size (CellViews.h) and compares coverage and
-// shading, allowing a pixel's shift. Where they differ in more than kMaxStandInMismatch of the
+// shading, allowing the shift its error allows (a pixel there). Where they differ in more than kMaxStandInMismatch of the
 // pixels, the candidate keeps its shape only farther away: its error is doubled and measured
 // again. A candidate that keeps it only where its cell spans under kMinStandInSpanPixels, about
 // where the cell's cube takes over, does not pay and is not kept. Of the candidates that pay,
@@ -35,6 +35,10 @@ inline constexpr double kMaxStandInMismatch = 0.05;
  *  ε pixels, the candidate where its error is below ε, so it is drawn over at least this
  *  factor of distances before the cube takes over. */
 inline constexpr float kMinStandInSpanPixels = 2.0f;
+/** Views are drawn with the cell at least this many pixels across: a cell first drawn a few
+ *  pixels across is measured finer, with the shift its error allows in as many pixels (a view
+ *  of a few pixels would count a pixel's quantisation as a tenth of the image). */
+inline constexpr int kMinMeasureSpan = 16;
 /** Views are drawn with the cell at most this many pixels across (a candidate whose error is
  *  a smaller share of its cell is measured a little coarser than where it is first drawn). */
 inline constexpr int kMaxMeasureSpan = 64;

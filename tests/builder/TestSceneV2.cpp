@@ -484,11 +484,11 @@ TEST(SceneV2Test, StandInsHalveWhatTheySimplifyAndTheirErrorsGrowUpTheTree) {
 }
 
 TEST(SceneV2Test, MeasuredChoiceKeepsOnlyTheStandInsThatKeepTheirShape) {
-    // The city's buildings are boxes of a dozen triangles: their simplified copies keep a small
-    // quadric error but lose walls and roofs seen from the cell's sides. By rule they are kept;
-    // measured, they keep their shape only where their cell spans under two pixels.
+    // A small cathedral (arcades, pillars, a vault): by rule every simplification that halves
+    // its source is kept; measured from the cell's six sides, one keeps its outline only where
+    // its cell spans under two pixels, and is not.
     const fs::path dir = freshTestDir();
-    const RecordingSink scene = generate("city");
+    const RecordingSink scene = generate("cathedral:bays=3");
     BuildOptions rule = v2Options();
     rule.hierarchy.standIns = true;
     rule.hierarchy.measureStandIns = false;

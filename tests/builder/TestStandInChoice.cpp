@@ -67,21 +67,24 @@ TEST(CellViewsTest, ASheetFillsTheViewsFacingItAndShowsAsALineEdgeOn) {
 TEST(CellViewsTest, MismatchAllowsAPixelsShiftAndNoMore) {
     CellViews source(kMin, kMax, 16);
     source.drawTriangles(sheet());
-    EXPECT_EQ(viewMismatch(source, source, 32.0f), 0.0);
+    EXPECT_EQ(viewMismatch(source, source, 1, 32.0f), 0.0);
     const auto shifted = [&](float dx) {
         CellViews views(kMin, kMax, 16);
         views.drawTriangles(sheet(dx));
-        return viewMismatch(source, views, 32.0f);
+        return viewMismatch(source, views, 1, 32.0f);
     };
     EXPECT_EQ(shifted(2.0f), 0.0);  // a pixel (2 units) off: as a stand-in's error may move it
     EXPECT_GT(shifted(6.0f), 0.05); // three pixels off
+    CellViews far(kMin, kMax, 16);
+    far.drawTriangles(sheet(6.0f));
+    EXPECT_EQ(viewMismatch(source, far, 3, 32.0f), 0.0) << "within a reach of three";
     CellViews recoloured(kMin, kMax, 16);
     recoloured.drawTriangles(sheet(0.0f, {128, 200, 128, 255}));
-    EXPECT_GT(viewMismatch(source, recoloured, 32.0f), 0.5);
-    EXPECT_EQ(viewMismatch(source, recoloured, 80.0f), 0.0);
+    EXPECT_GT(viewMismatch(source, recoloured, 1, 32.0f), 0.5);
+    EXPECT_EQ(viewMismatch(source, recoloured, 1, 80.0f), 0.0);
     CellViews empty(kMin, kMax, 16);
-    EXPECT_EQ(viewMismatch(empty, empty, 32.0f), 0.0);
-    EXPECT_EQ(viewMismatch(source, empty, 32.0f), 1.0);
+    EXPECT_EQ(viewMismatch(empty, empty, 1, 32.0f), 0.0);
+    EXPECT_EQ(viewMismatch(source, empty, 1, 32.0f), 1.0);
 }
 
 TEST(CellViewsTest, SplatsCoverDiscsOfTheirDiameterAndAtLeastTheirPixel) {
