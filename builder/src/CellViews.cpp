@@ -192,19 +192,20 @@ void CellViews::drawSplats(std::span<const storage::PackedVertex> points, float 
 
 namespace {
 
-/** Whether `a`'s pixel (x, y), if covered, has a covered pixel of `b` within `reach` that
- *  shades within `step` of it. */
-bool matched(
+/** How far `a`'s pixel (x, y) shades from the nearest in shade of `b`'s covered pixels within
+ *  `reach` (the largest channel's difference, 8-bit steps): 0 where `a` covers nothing there,
+ *  256 where `b` covers nothing near. */
+int nearestShade(
         std::span<const CellViews::Pixel> a,
         std::span<const CellViews::Pixel> b,
         int resolution,
         int x,
         int y,
-        int reach,
-        float step) {
+        int reach) {
     const CellViews::Pixel& p = a[static_cast<std::size_t>(y * resolution + x)];
     if (!p.covered)
-        return true;
+        return 0;
+    int best = 256;
     for (int dy = -reach; dy <= reach; ++dy)
         for (int dx = -reach; dx <= reach; ++dx) {
             const int nx = x + dx;
@@ -217,19 +218,19 @@ bool matched(
             int difference = 0;
             for (std::size_t c = 0; c < 3; ++c)
                 difference = std::max(difference, std::abs(int{p.shade[c]} - int{q.shade[c]}));
-            if (static_cast<float>(difference) <= step)
-                return true;
+            best = std::min(best, difference);
         }
-    return false;
+    return best;
 }
 
 } // namespace
 
-double viewMismatch(const CellViews& a, const CellViews& b, int reach, float shadeStep) {
+ViewDifference viewDifference(const CellViews& a, const CellViews& b, int reach, float shadeStep) {
     FF_ASSERT(a.resolution() == b.resolution());
     const int r = a.resolution();
     std::uint64_t either = 0;
     std::uint64_t mismatched = 0;
+    double sum = 0.0;
     for (int v = 0; v < CellViews::kViews; ++v) {
         const std::span<const CellViews::Pixel> va = a.view(v);
         const std::span<const CellViews::Pixel> vb = b.view(v);
@@ -239,11 +240,15 @@ double viewMismatch(const CellViews& a, const CellViews& b, int reach, float sha
                 if (!va[i].covered && !vb[i].covered)
                     continue;
                 ++either;
-                if (!matched(va, vb, r, x, y, reach, shadeStep) || !matched(vb, va, r, x, y, reach, shadeStep))
-                    ++mismatched;
+                const int difference =
+                        std::min(255, std::max(nearestShade(va, vb, r, x, y, reach), nearestShade(vb, va, r, x, y, reach)));
+                sum += difference;
+                mismatched += static_cast<float>(difference) > shadeStep ? 1u : 0u;
             }
     }
-    return either == 0 ? 0.0 : static_cast<double>(mismatched) / static_cast<double>(either);
+    if (either == 0)
+        return {};
+    return {static_cast<double>(mismatched) / static_cast<double>(either), sum / static_cast<double>(either)};
 }
 
 } // namespace ff::builder

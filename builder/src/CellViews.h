@@ -66,13 +66,22 @@ private:
     std::array<std::vector<Pixel>, kViews> mViews;
 };
 
+/** How differently two views of a box show it (viewDifference). */
+struct ViewDifference {
+    /** The share of the pixels either covers that the other shows no match for. */
+    double mismatch = 0.0;
+    /** Over the same pixels, the mean of each one's difference from its best match, in 8-bit
+     *  steps of the largest channel (255 where the other covers nothing near). */
+    double meanDifference = 0.0;
+};
+
 /**
- * How differently `a` and `b` (views of the same box at the same resolution) show it: the share
- * of the pixels either covers, over the six views, that one covers where the other covers no
- * pixel within `reach` pixels (in x and y: the shift a stand-in's error allows), or shades more
- * than `shadeStep` 8-bit steps apart from every covered pixel of the other within `reach`. 0
- * when neither covers anything.
+ * How differently `a` and `b` (views of the same box at the same resolution) show it, over
+ * the six views: a pixel either covers is matched by the covered pixel of the other within
+ * `reach` pixels (in x and y: the shift a stand-in's error allows) that shades nearest to it,
+ * both ways; it mismatches where that is more than `shadeStep` 8-bit steps apart, or there is
+ * none. Zeros when neither covers anything.
  */
-[[nodiscard]] double viewMismatch(const CellViews& a, const CellViews& b, int reach, float shadeStep);
+[[nodiscard]] ViewDifference viewDifference(const CellViews& a, const CellViews& b, int reach, float shadeStep);
 
 } // namespace ff::builder

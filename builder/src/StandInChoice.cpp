@@ -5,6 +5,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
+#include <cstdlib>
 
 namespace ff::builder {
 
@@ -36,26 +38,31 @@ const CellViews& StandInMeasure::sourceViews(int span) {
     return found->second;
 }
 
+ViewDifference StandInMeasure::compareAt(const StandIn& candidate, float candidateError, float viewError) {
+    // Where a pixel is the view's error, a pixel's shift is what the error allows; drawn finer
+    // (a small span, kMinMeasureSpan), the shift it allows is as many pixels as the error spans.
+    const float span = viewError > 0.0f ? mSide / viewError : INFINITY;
+    const int pixels = static_cast<int>(std::clamp(
+            std::ceil(span), static_cast<float>(kMinMeasureSpan), static_cast<float>(kMaxMeasureSpan)));
+    const float pixel = mSide / static_cast<float>(pixels);
+    const int reach = std::max(1, static_cast<int>(std::floor(viewError / pixel)));
+    CellViews views = blankViews(pixels);
+    views.drawTriangles(candidate.triangles);
+    // The runtime draws a splat twice its error across on screen (no holes).
+    views.drawSplats(candidate.points, 2.0f * candidateError);
+    return viewDifference(sourceViews(pixels), views, reach, kShadingColourStep);
+}
+
 MeasuredStandIn StandInMeasure::measure(const StandIn& candidate) {
     MeasuredStandIn m;
     m.error = candidate.error;
     if (!(mSide > 0.0f) || !std::isfinite(m.error))
         return m; // no surface to stand in for, or no promise to keep
     for (;;) {
-        const float span = m.error > 0.0f ? mSide / m.error : INFINITY;
-        if (!(span >= kMinStandInSpanPixels))
+        if (!(m.error <= mSide / kMinStandInSpanPixels))
             return m; // does not pay
-        // Where a pixel is its error, a pixel's shift is what the error allows; drawn finer (a
-        // small span, kMinMeasureSpan), the shift it allows is as many pixels as the error spans.
-        const int pixels = static_cast<int>(std::clamp(
-                std::ceil(span), static_cast<float>(kMinMeasureSpan), static_cast<float>(kMaxMeasureSpan)));
-        const float pixel = mSide / static_cast<float>(pixels);
-        const int reach = std::max(1, static_cast<int>(std::floor(m.error / pixel)));
-        CellViews views = blankViews(pixels);
-        views.drawTriangles(candidate.triangles);
-        // The runtime draws a splat twice its error across on screen (no holes).
-        views.drawSplats(candidate.points, 2.0f * m.error);
-        m.mismatch = viewMismatch(sourceViews(pixels), views, reach, kShadingColourStep);
+        const ViewDifference difference = compareAt(candidate, m.error, m.error);
+        m.mismatch = difference.mismatch;
         if (m.mismatch <= kMaxStandInMismatch) {
             m.pays = true;
             return m;
@@ -63,6 +70,16 @@ MeasuredStandIn StandInMeasure::measure(const StandIn& candidate) {
         m.error = std::max(2.0f * m.error, mSide / static_cast<float>(kMaxMeasureSpan));
         ++m.raised;
     }
+}
+
+bool StandInMeasure::firstIsBetter(
+        const StandIn& a, const MeasuredStandIn& aMeasured, const StandIn& b, const MeasuredStandIn& bMeasured) {
+    const float both = std::max(aMeasured.error, bMeasured.error); // where both are drawn
+    const double da = compareAt(a, aMeasured.error, both).meanDifference;
+    const double db = compareAt(b, bMeasured.error, both).meanDifference;
+    if (std::abs(da - db) > std::max(kStandInDifferenceTie, 0.1 * std::max(da, db)))
+        return da < db;
+    return prefer(aMeasured, elementsOf(a), bMeasured, elementsOf(b));
 }
 
 bool prefer(const MeasuredStandIn& a, std::size_t aElements, const MeasuredStandIn& b, std::size_t bElements) {

@@ -8,9 +8,11 @@
 // shading, allowing the shift its error allows (a pixel there). Where they differ in more than kMaxStandInMismatch of the
 // pixels, the candidate keeps its shape only farther away: its error is doubled and measured
 // again. A candidate that keeps it only where its cell spans under kMinStandInSpanPixels, about
-// where the cell's cube takes over, does not pay and is not kept. Of the candidates that pay,
-// the cell keeps the one with the smaller measured error (drawn from nearer, so it saves more
-// of the subtree), the one with fewer elements when the errors are within kStandInErrorTie.
+// where the cell's cube takes over, does not pay and is not kept. Of two candidates that pay,
+// the cell keeps the one whose views differ less from the source's where both would be drawn
+// (at the larger error; mean difference of shade); where they look alike, the one with the
+// smaller measured error (drawn from nearer, so it saves more of the subtree), and where the
+// errors are within kStandInErrorTie, the one with fewer elements.
 //
 // meshoptimizer's quadric error bounds how far the surface moved, not what it shows: a
 // simplification that merges leaves or closes a window keeps a small error and loses coverage;
@@ -26,6 +28,7 @@
 namespace ff::builder {
 
 class CellViews;
+struct ViewDifference;
 
 /** A candidate keeps its error where at most this share of the pixels of its views, drawn a
  *  pixel to its error, differ from its source's (more than a pixel's shift, or kShadingColourStep). */
@@ -42,6 +45,9 @@ inline constexpr int kMinMeasureSpan = 16;
 /** Views are drawn with the cell at most this many pixels across (a candidate whose error is
  *  a smaller share of its cell is measured a little coarser than where it is first drawn). */
 inline constexpr int kMaxMeasureSpan = 64;
+/** Candidates whose mean differences from their source, where both are drawn, are within
+ *  this many 8-bit steps (or a tenth) of each other look alike: the error decides. */
+inline constexpr double kStandInDifferenceTie = 0.5;
 /** Errors within this factor of each other count as equal: the cheaper candidate is kept. */
 inline constexpr float kStandInErrorTie = 1.25f;
 
@@ -66,11 +72,19 @@ public:
     StandInMeasure& operator=(const StandInMeasure&) = delete;
 
     [[nodiscard]] MeasuredStandIn measure(const StandIn& candidate);
+    /** Whether the cell should keep `a` rather than `b` (both measured, both paying): the one
+     *  whose views differ less from the source's where both are drawn (at the larger of their
+     *  errors, by mean difference), else prefer(). */
+    [[nodiscard]] bool firstIsBetter(
+            const StandIn& a, const MeasuredStandIn& aMeasured, const StandIn& b, const MeasuredStandIn& bMeasured);
 
 private:
     /** The source's views with the cell `span` pixels across (drawn on first use). */
     const CellViews& sourceViews(int span);
     [[nodiscard]] CellViews blankViews(int span) const;
+    /** `candidate` (drawn as at `candidateError`) against the source, viewed where a pixel is
+     *  `viewError` (the shift allowed). */
+    [[nodiscard]] ViewDifference compareAt(const StandIn& candidate, float candidateError, float viewError);
 
     std::span<const storage::PackedTriangle> mSource;
     glm::vec3 mMin;
@@ -79,7 +93,7 @@ private:
     std::map<int, CellViews> mSourceViews;
 };
 
-/** Which of two measured candidates a cell keeps (both must pay; see above): true for `a`. */
+/** Of two measured candidates that look alike, which a cell keeps: true for `a` (see above). */
 [[nodiscard]] bool prefer(const MeasuredStandIn& a, std::size_t aElements, const MeasuredStandIn& b, std::size_t bElements);
 
 /** A stand-in's elements: its triangles and splats (a point costs about what a triangle does). */

@@ -111,9 +111,8 @@ CellChoice chooseStandIn(
         }
     }
 
-    const bool splatsWin =
-            splatted && simplified &&
-            !prefer(simplifiedMeasured, elementsOf(*simplified), splatsMeasured, elementsOf(*splatted));
+    const bool splatsWin = splatted && simplified && measure &&
+                           !measure->firstIsBetter(*simplified, simplifiedMeasured, *splatted, splatsMeasured);
     choice.counts.splatsOverSimplified += splatsWin ? 1u : 0u;
     const MeasuredStandIn& kept = splatsWin || !simplified ? splatsMeasured : simplifiedMeasured;
     if (splatsWin || (splatted && !simplified))

@@ -2,7 +2,8 @@
 // builder/src/CellViews.h): the six views see coverage and shading, edge-on slivers included; a
 // candidate that keeps its promise is kept at its own error, one that moved further than it
 // says is kept only at the error it keeps, one that loses the surface or its colours does not
-// pay; of two that pay the smaller error wins, the cheaper on a tie.
+// pay; of two that pay the one that looks more like its source wins, then the smaller error,
+// then the cheaper.
 
 #include "CellViews.h"
 #include "StandInChoice.h"
@@ -67,24 +68,24 @@ TEST(CellViewsTest, ASheetFillsTheViewsFacingItAndShowsAsALineEdgeOn) {
 TEST(CellViewsTest, MismatchAllowsAPixelsShiftAndNoMore) {
     CellViews source(kMin, kMax, 16);
     source.drawTriangles(sheet());
-    EXPECT_EQ(viewMismatch(source, source, 1, 32.0f), 0.0);
+    EXPECT_EQ(viewDifference(source, source, 1, 32.0f).mismatch, 0.0);
     const auto shifted = [&](float dx) {
         CellViews views(kMin, kMax, 16);
         views.drawTriangles(sheet(dx));
-        return viewMismatch(source, views, 1, 32.0f);
+        return viewDifference(source, views, 1, 32.0f).mismatch;
     };
     EXPECT_EQ(shifted(2.0f), 0.0);  // a pixel (2 units) off: as a stand-in's error may move it
     EXPECT_GT(shifted(6.0f), 0.05); // three pixels off
     CellViews far(kMin, kMax, 16);
     far.drawTriangles(sheet(6.0f));
-    EXPECT_EQ(viewMismatch(source, far, 3, 32.0f), 0.0) << "within a reach of three";
+    EXPECT_EQ(viewDifference(source, far, 3, 32.0f).mismatch, 0.0) << "within a reach of three";
     CellViews recoloured(kMin, kMax, 16);
     recoloured.drawTriangles(sheet(0.0f, {128, 200, 128, 255}));
-    EXPECT_GT(viewMismatch(source, recoloured, 1, 32.0f), 0.5);
-    EXPECT_EQ(viewMismatch(source, recoloured, 1, 80.0f), 0.0);
+    EXPECT_GT(viewDifference(source, recoloured, 1, 32.0f).mismatch, 0.5);
+    EXPECT_EQ(viewDifference(source, recoloured, 1, 80.0f).mismatch, 0.0);
     CellViews empty(kMin, kMax, 16);
-    EXPECT_EQ(viewMismatch(empty, empty, 1, 32.0f), 0.0);
-    EXPECT_EQ(viewMismatch(source, empty, 1, 32.0f), 1.0);
+    EXPECT_EQ(viewDifference(empty, empty, 1, 32.0f).mismatch, 0.0);
+    EXPECT_EQ(viewDifference(source, empty, 1, 32.0f).mismatch, 1.0);
 }
 
 TEST(CellViewsTest, SplatsCoverDiscsOfTheirDiameterAndAtLeastTheirPixel) {
@@ -137,6 +138,23 @@ TEST(StandInChoiceTest, ACandidateThatLosesTheSurfaceOrItsColoursDoesNotPay) {
     EXPECT_FALSE(measure.measure(candidate(quarter, 0.5f)).pays);
     // An error of half the cell: drawn only where the cube nearly is.
     EXPECT_FALSE(measure.measure(candidate(sheet(), 0.6f * kCells)).pays);
+}
+
+TEST(StandInChoiceTest, OfTwoThatPayTheOneThatLooksMoreLikeItsSourceWins) {
+    const auto source = sheet();
+    StandInMeasure measure(source, kMin, kMax);
+    // Both pay; the tinted one promises the smaller error but differs by 20 steps everywhere.
+    const StandIn exact = candidate(sheet(), 2.0f);
+    const StandIn tinted = candidate(sheet(0.0f, {148, 148, 148, 255}), 1.0f);
+    const MeasuredStandIn exactMeasured = measure.measure(exact);
+    const MeasuredStandIn tintedMeasured = measure.measure(tinted);
+    ASSERT_TRUE(exactMeasured.pays && tintedMeasured.pays);
+    EXPECT_TRUE(measure.firstIsBetter(exact, exactMeasured, tinted, tintedMeasured));
+    EXPECT_FALSE(measure.firstIsBetter(tinted, tintedMeasured, exact, exactMeasured));
+    // Alike: the smaller error wins.
+    const StandIn nearer = candidate(sheet(), 1.0f);
+    const MeasuredStandIn nearerMeasured = measure.measure(nearer);
+    EXPECT_TRUE(measure.firstIsBetter(nearer, nearerMeasured, exact, exactMeasured));
 }
 
 TEST(StandInChoiceTest, TheSmallerErrorWinsAndTheCheaperOnATie) {
