@@ -150,12 +150,34 @@ void CellViews::drawEdge(
         const Projected& b,
         const std::array<float, 3>& shadeA,
         const std::array<float, 3>& shadeB) {
-    const float length = std::max(std::abs(b.x - a.x), std::abs(b.y - a.y));
-    const int steps = static_cast<int>(std::min(std::ceil(2.0f * length), 4.0f * static_cast<float>(mResolution))) + 1;
+    if (!std::isfinite(a.x) || !std::isfinite(a.y) || !std::isfinite(b.x) || !std::isfinite(b.y))
+        return;
+    // Clipped to the raster and a pixel around it (Liang-Barsky), so what is cast to int is small.
+    const float dx = b.x - a.x;
+    const float dy = b.y - a.y;
+    const float lo = -1.0f;
+    const float hi = static_cast<float>(mResolution + 1);
+    float t0 = 0.0f;
+    float t1 = 1.0f;
+    const auto clip = [&](float p, float q) { // keeps the part where p t <= q
+        if (p == 0.0f)
+            return q >= 0.0f;
+        const float r = q / p;
+        if (p < 0.0f)
+            t0 = std::max(t0, r);
+        else
+            t1 = std::min(t1, r);
+        return t0 <= t1;
+    };
+    if (!clip(-dx, a.x - lo) || !clip(dx, hi - a.x) || !clip(-dy, a.y - lo) || !clip(dy, hi - a.y))
+        return;
+    // Half a pixel a step along the longer axis: at most ~2 (resolution + 2) steps.
+    const float length = std::max(std::abs(dx), std::abs(dy)) * (t1 - t0);
+    const int steps = static_cast<int>(std::ceil(2.0f * std::min(length, hi - lo))) + 1;
     for (int i = 0; i <= steps; ++i) {
-        const float t = static_cast<float>(i) / static_cast<float>(steps);
-        const int x = static_cast<int>(std::floor(a.x + t * (b.x - a.x)));
-        const int y = static_cast<int>(std::floor(a.y + t * (b.y - a.y)));
+        const float t = t0 + (t1 - t0) * static_cast<float>(i) / static_cast<float>(steps);
+        const int x = static_cast<int>(std::floor(std::clamp(a.x + t * dx, lo, hi)));
+        const int y = static_cast<int>(std::floor(std::clamp(a.y + t * dy, lo, hi)));
         if (x < 0 || y < 0 || x >= mResolution || y >= mResolution)
             continue;
         std::array<float, 3> shade{};
@@ -166,7 +188,9 @@ void CellViews::drawEdge(
 }
 
 void CellViews::drawSplats(std::span<const storage::PackedVertex> points, float diameter) {
-    const float radius = std::max(0.5f * diameter / mPixel, 0.5f);
+    // A disc wider than the raster covers it all; a bad diameter draws the point's pixel.
+    const float size = static_cast<float>(mResolution);
+    const float radius = std::isfinite(diameter) ? std::clamp(0.5f * diameter / mPixel, 0.5f, size + 2.0f) : 0.5f;
     const int reach = static_cast<int>(std::ceil(radius));
     for (const storage::PackedVertex& point : points) {
         if (!finite(point.position))
@@ -174,13 +198,14 @@ void CellViews::drawSplats(std::span<const storage::PackedVertex> points, float 
         const Lit lit(point);
         for (int view = 0; view < kViews; ++view) {
             const Projected p = project(view, point.position);
+            if (!(p.x > -radius - 1.0f && p.x < size + radius + 1.0f && p.y > -radius - 1.0f &&
+                  p.y < size + radius + 1.0f))
+                continue; // off the raster (or not finite)
             const std::array<float, 3> shade = lit.along(axisOf(view));
             const int px = static_cast<int>(std::floor(p.x));
             const int py = static_cast<int>(std::floor(p.y));
-            for (int y = py - reach; y <= py + reach; ++y)
-                for (int x = px - reach; x <= px + reach; ++x) {
-                    if (x < 0 || y < 0 || x >= mResolution || y >= mResolution)
-                        continue;
+            for (int y = std::max(py - reach, 0); y <= std::min(py + reach, mResolution - 1); ++y)
+                for (int x = std::max(px - reach, 0); x <= std::min(px + reach, mResolution - 1); ++x) {
                     const float dx = static_cast<float>(x) + 0.5f - p.x;
                     const float dy = static_cast<float>(y) + 0.5f - p.y;
                     if ((x == px && y == py) || dx * dx + dy * dy <= radius * radius)

@@ -24,8 +24,8 @@ public:
     CellViews(const glm::vec3& boundsMin, const glm::vec3& boundsMax, int resolution);
 
     /** Draws triangles, conservatively: a pixel is covered where a triangle overlaps it, so
-     *  geometry thinner than a pixel seen edge-on still shows (non-finite and degenerate ones
-     *  are skipped). */
+     *  geometry thinner than a pixel seen edge-on still shows, and one seen exactly edge-on (or
+     *  degenerate) draws its edges; non-finite ones are skipped. */
     void drawTriangles(std::span<const storage::PackedTriangle> triangles);
     /** Draws splats as discs of `diameter` (box units) around each point, at least the pixel
      *  each point falls in, as the runtime's points are at least a pixel. */

@@ -39,13 +39,15 @@ const CellViews& StandInMeasure::sourceViews(int span) {
 }
 
 ViewDifference StandInMeasure::compareAt(const StandIn& candidate, float candidateError, float viewError) {
+    if (!measurable() || !(viewError >= 0.0f) || !std::isfinite(viewError) || !std::isfinite(candidateError))
+        return {1.0, 255.0}; // nothing it could be said to match
     // Where a pixel is the view's error, a pixel's shift is what the error allows; drawn finer
     // (a small span, kMinMeasureSpan), the shift it allows is as many pixels as the error spans.
     const float span = viewError > 0.0f ? mSide / viewError : INFINITY;
     const int pixels = static_cast<int>(std::clamp(
             std::ceil(span), static_cast<float>(kMinMeasureSpan), static_cast<float>(kMaxMeasureSpan)));
     const float pixel = mSide / static_cast<float>(pixels);
-    const int reach = std::max(1, static_cast<int>(std::floor(viewError / pixel)));
+    const int reach = static_cast<int>(std::clamp(std::floor(viewError / pixel), 1.0f, static_cast<float>(pixels)));
     CellViews views = blankViews(pixels);
     views.drawTriangles(candidate.triangles);
     // The runtime draws a splat twice its error across on screen (no holes).
@@ -56,20 +58,22 @@ ViewDifference StandInMeasure::compareAt(const StandIn& candidate, float candida
 MeasuredStandIn StandInMeasure::measure(const StandIn& candidate) {
     MeasuredStandIn m;
     m.error = candidate.error;
-    if (!(mSide > 0.0f) || !std::isfinite(m.error))
+    if (!measurable() || !(m.error >= 0.0f) || !std::isfinite(m.error))
         return m; // no surface to stand in for, or no promise to keep
-    for (;;) {
-        if (!(m.error <= mSide / kMinStandInSpanPixels))
-            return m; // does not pay
+    // The error at least doubles each round, from at least side / 64: at most 6 more rounds
+    // before it passes side / 2.
+    while (m.error <= mSide / kMinStandInSpanPixels) {
         const ViewDifference difference = compareAt(candidate, m.error, m.error);
         m.mismatch = difference.mismatch;
         if (m.mismatch <= kMaxStandInMismatch) {
             m.pays = true;
             return m;
         }
-        m.error = std::max(2.0f * m.error, mSide / static_cast<float>(kMaxMeasureSpan));
+        // Below side / 64 it was measured at 64 pixels already: the next round is coarser.
+        m.error = std::max(2.0f * m.error, 2.0f * mSide / static_cast<float>(kMaxMeasureSpan));
         ++m.raised;
     }
+    return m; // keeps its shape only where the cube is nearly drawn: does not pay
 }
 
 bool StandInMeasure::firstIsBetter(

@@ -22,6 +22,7 @@
 
 #include <glm/vec3.hpp>
 
+#include <cmath>
 #include <map>
 #include <span>
 
@@ -82,6 +83,8 @@ private:
     /** The source's views with the cell `span` pixels across (drawn on first use). */
     const CellViews& sourceViews(int span);
     [[nodiscard]] CellViews blankViews(int span) const;
+    /** A box with a finite, positive largest side (else nothing is measured, nothing pays). */
+    [[nodiscard]] bool measurable() const noexcept { return mSide > 0.0f && std::isfinite(mSide); }
     /** `candidate` (drawn as at `candidateError`) against the source, viewed where a pixel is
      *  `viewError` (the shift allowed). */
     [[nodiscard]] ViewDifference compareAt(const StandIn& candidate, float candidateError, float viewError);

@@ -409,9 +409,11 @@ Fetch NodePages::collectPayload(
             }
         }
         if (view.forced && keptOf(view.forcedKind()) == nullptr) {
-            // The forced kind is not kept here: the nearest kept one, counted. (Kept splats too
-            // coarse to draw without holes refine instead: their children's are finer.)
+            // The forced kind is not kept here: the nearest kept one, counted. (A forced kind
+            // kept but too coarse to draw without holes is refined instead, below: its
+            // children's splats are finer.)
             ++mStats->representationFallbacks;
+            bool loading = false;
             for (const Payload kind : {Payload::Simplified, Payload::Splats}) {
                 const storage::RepresentationRecord* kept = keptOf(kind);
                 if (kept == nullptr || !view.acceptsInstead(kind, kept->parameter))
@@ -420,9 +422,13 @@ Fetch NodePages::collectPayload(
                     drawn = kind;
                     return Fetch::Ready;
                 }
+                loading = true;
             }
-            drawn = Payload::Cube; // a forced view's cell has one
-            return Fetch::Ready;
+            if (!loading) {
+                drawn = Payload::Cube; // a forced view's cell has one
+                return Fetch::Ready;
+            }
+            // The other stand-in is asked for: refined as without it meanwhile, as in auto.
         }
         return admit(runsOf(priority, out, Payload::Own), uploads, out); // the table read once
     }

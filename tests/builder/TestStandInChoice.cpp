@@ -13,6 +13,7 @@
 #include <gtest/gtest.h>
 
 #include <array>
+#include <cmath>
 #include <vector>
 
 namespace ff::builder {
@@ -96,6 +97,28 @@ TEST(CellViewsTest, SplatsCoverDiscsOfTheirDiameterAndAtLeastTheirPixel) {
     CellViews wide(kMin, kMax, 16);
     wide.drawSplats(std::span(&point, 1), 8.0f); // a disc 4 pixels across around a pixel corner
     EXPECT_EQ(coveredIn(wide, 2), 12u);
+}
+
+TEST(CellViewsTest, GeometryFarOutsideTheBoxIsClippedNotOverflowed) {
+    // Finite but far beyond what an int holds once projected: drawn clipped (UBSan checks the
+    // casts), and what lies off the raster draws nothing.
+    CellViews views(kMin, kMax, 16);
+    const std::array<std::uint8_t, 4> white{255, 255, 255, 255};
+    const storage::PackedTriangle huge{{vertexAt(-1e15f, 0.0f, -1e15f, white), vertexAt(1e15f, 0.0f, -1e15f, white),
+                                         vertexAt(0.0f, 0.0f, 1e15f, white)}};
+    const storage::PackedTriangle edgeOnFar{{vertexAt(-1e20f, 0.0f, 5.0f, white), vertexAt(1e20f, 0.0f, 5.0f, white),
+                                              vertexAt(0.0f, 0.0f, 5.0f, white)}};
+    views.drawTriangles(std::vector{huge, edgeOnFar});
+    EXPECT_EQ(coveredIn(views, 2), 256u);
+    CellViews points(kMin, kMax, 16);
+    const std::vector<storage::PackedVertex> far = {vertexAt(1e30f, 0.0f, 1e30f, white), vertexAt(-1e9f, 0.0f, 4.0f, white)};
+    points.drawSplats(far, 4.0f);
+    points.drawSplats(far, NAN);
+    points.drawSplats(far, 1e30f);
+    // Only the views along x see the second point (x is what they drop); the first is off all.
+    for (int v = 2; v < CellViews::kViews; ++v)
+        EXPECT_EQ(coveredIn(points, v), 0u) << "view " << v;
+    EXPECT_GT(coveredIn(points, 0), 0u);
 }
 
 StandIn candidate(std::vector<storage::PackedTriangle> triangles, float error) {

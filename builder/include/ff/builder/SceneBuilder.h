@@ -95,9 +95,9 @@ struct BuildReport {
     std::uint64_t standInsTooLarge = 0;    ///< v2: sources over 2^20, stand-ins over a page limit, or above what could not be
     int splatSpacing = 0;                  ///< v2: HierarchyParams's (0: no splats)
     bool standInsMeasured = false;         ///< v2: HierarchyParams::measureStandIns (with stand-ins or splats)
-    std::uint64_t standInsNotPaying = 0;   ///< v2: cells whose candidates kept their shape only under 4 px (measured)
+    std::uint64_t standInsNotPaying = 0;   ///< v2: cells whose candidates kept their shape only under 2 px (measured)
     std::uint64_t standInErrorsRaised = 0; ///< v2: kept stand-ins whose error the measure raised
-    std::uint64_t splatsNotPaying = 0;     ///< v2: splat sets that kept their shape only under 4 px (measured)
+    std::uint64_t splatsNotPaying = 0;     ///< v2: splat sets that kept their shape only under 2 px (measured)
     std::uint64_t splatsOverSimplified = 0; ///< v2: cells where both kinds paid and splats measured better
     std::uint64_t splatNodes = 0;          ///< v2: of standInNodes, those whose stand-in is splats
     std::uint64_t splats = 0;              ///< v2: their points (their triangles are in standInTriangles)
