@@ -9,7 +9,7 @@ radii x 8 and 20 degrees up, 30 about, 640x480) against the 4x4 reference — ru
 frame time over brute force's. Writes OUT/shared-models.csv, .md and .png beside the per-model
 reports.
 
-    scripts/bench_shared_models.py [--farfield build-dev/viewer/farfield] [--out DIR] [--quick]
+    scripts/bench_shared_models.py [--farfield build-dev/viewer/farfield] [--out DIR] [--frames N] [--quick]
 """
 
 import argparse
@@ -60,7 +60,7 @@ def scenario(relative: pathlib.Path) -> dict:
     }
 
 
-def summarise(out: pathlib.Path, names):
+def summarise(out: pathlib.Path, names, frames: int):
     rows = []
     for name, relative in names:
         table = list(csv.DictReader(open(out / f"{name}.csv")))
@@ -86,7 +86,7 @@ def summarise(out: pathlib.Path, names):
     with open(out / "shared-models.md", "w") as f:
         f.write("# Every model of ../shared/data: the default (auto, eps 1) against brute force\n\n")
         f.write("Built as format 2 with `--stand-ins --splats 8`; six views (1.2, 2.5, 6 radii x 8 and 20 "
-                "degrees up, 30 about), 640x480, against the 4x4 reference; median of 3 frames. "
+                f"degrees up, 30 about), 640x480, against the 4x4 reference; median of {frames} frames. "
                 "Command: `scripts/bench_shared_models.py`. Per model: the worst PSNR loss against brute "
                 "force over the views, and frame time over brute force's (min, median, max).\n\n")
         f.write("| " + " | ".join(rows[0].keys()) + " |\n")
@@ -122,6 +122,7 @@ def main():
     parser.add_argument("--out", default="/tmp/shared-models")
     parser.add_argument("--shared", default=str(pathlib.Path(__file__).resolve().parents[2] / "shared"))
     parser.add_argument("--quick", action="store_true")
+    parser.add_argument("--frames", type=int, default=3, help="timed frames a measurement (the median is kept)")
     args = parser.parse_args()
     out = pathlib.Path(args.out)
     (out / "scenarios").mkdir(parents=True, exist_ok=True)
@@ -131,12 +132,12 @@ def main():
         path = out / "scenarios" / f"{name}.json"
         path.write_text(json.dumps(scenario(relative), indent=2) + "\n")
         files.append(str(path))
-    command = [args.farfield, "bench", *files, "--out", str(out), "--frames", "3"]
+    command = [args.farfield, "bench", *files, "--out", str(out), "--frames", str(args.frames)]
     if args.quick:
         command.append("--quick")
     env = dict(os.environ, FF_SHARED_DATA=str(pathlib.Path(args.shared) / "data"))
     subprocess.run(command, check=True, env=env)
-    summarise(out, names)
+    summarise(out, names, args.frames)
     print(f"{out}/shared-models.md")
 
 

@@ -7,6 +7,8 @@
 #include <ff/storage/ClusterCodec.h>
 #include <ff/storage/VertexCodec.h>
 
+#include "PackedVertices.h"
+
 #include <gtest/gtest.h>
 
 #include <array>
@@ -78,13 +80,7 @@ TEST(SplatsTest, StratificationNeverDeletesTheOnlyCoverOfADeletedPoint) {
 
 constexpr int kCells = 48; // a 48 x 48 sheet of unit squares: 4,608 triangles
 
-storage::PackedVertex vertexAt(float x, float y, float z, std::array<std::uint8_t, 4> color) {
-    storage::PackedVertex v;
-    v.position = {x, y, z};
-    v.normalOct = storage::encodeOctNormal(0.0f, 1.0f, 0.0f);
-    v.color = color;
-    return v;
-}
+using testing::upFacingVertex;
 
 /** A flat sheet at height `y`, red where x < 24 and blue beyond. */
 std::vector<storage::PackedTriangle> sheet(float y = 0.0f) {
@@ -96,7 +92,7 @@ std::vector<storage::PackedTriangle> sheet(float y = 0.0f) {
     for (int z = 0; z < kCells; ++z)
         for (int x = 0; x < kCells; ++x) {
             const auto v = [&](int dx, int dz) {
-                return vertexAt(static_cast<float>(x + dx), y, static_cast<float>(z + dz), colorAt(x));
+                return upFacingVertex(static_cast<float>(x + dx), y, static_cast<float>(z + dz), colorAt(x));
             };
             out.push_back({{v(0, 0), v(0, 1), v(1, 1)}});
             out.push_back({{v(0, 0), v(1, 1), v(1, 0)}});
@@ -165,8 +161,8 @@ TEST(SplatsTest, ThinWiresAreCoveredAlongTheirLength) {
             const float z = 1.0f + 2.3f * static_cast<float>(w);
             const float x0 = 0.8f * static_cast<float>(k);
             const float x1 = x0 + 0.8f;
-            wires.push_back({{vertexAt(x0, 0.5f, z, black), vertexAt(x1, 0.5f, z, black),
-                              vertexAt(x1, 0.5f, z + 0.001f, black)}});
+            wires.push_back({{upFacingVertex(x0, 0.5f, z, black), upFacingVertex(x1, 0.5f, z, black),
+                              upFacingVertex(x1, 0.5f, z + 0.001f, black)}});
         }
     constexpr float spacing = kCells / 8.0f;
     SplatSet splats;
@@ -204,7 +200,7 @@ TEST(SplatsTest, AnUnlitSurfaceGivesUnlitSplats) {
 TEST(SplatsTest, LargeTrianglesAreKeptAsTriangles) {
     auto source = sheet();
     const std::array<std::uint8_t, 4> grey{128, 128, 128, 255};
-    const auto big = [&](float x, float z) { return vertexAt(x, 1.0f, z, grey); };
+    const auto big = [&](float x, float z) { return upFacingVertex(x, 1.0f, z, grey); };
     source.push_back({{big(0, 0), big(0, kCells), big(kCells, kCells)}});
     source.push_back({{big(0, 0), big(kCells, kCells), big(kCells, 0)}});
     constexpr float spacing = kCells / 8.0f;

@@ -10,6 +10,8 @@
 
 #include <ff/storage/VertexCodec.h>
 
+#include "PackedVertices.h"
+
 #include <gtest/gtest.h>
 
 #include <array>
@@ -21,13 +23,7 @@ namespace {
 
 constexpr int kCells = 32; // a 32 x 32 sheet of unit squares in y = 0, in a 32-unit box
 
-storage::PackedVertex vertexAt(float x, float y, float z, std::array<std::uint8_t, 4> color) {
-    storage::PackedVertex v;
-    v.position = {x, y, z};
-    v.normalOct = storage::encodeOctNormal(0.0f, 1.0f, 0.0f);
-    v.color = color;
-    return v;
-}
+using testing::upFacingVertex;
 
 /** The sheet, moved `dx` along x, grey, or `color`. */
 std::vector<storage::PackedTriangle> sheet(float dx = 0.0f, std::array<std::uint8_t, 4> color = {128, 128, 128, 255}) {
@@ -35,7 +31,7 @@ std::vector<storage::PackedTriangle> sheet(float dx = 0.0f, std::array<std::uint
     for (int z = 0; z < kCells; ++z)
         for (int x = 0; x < kCells; ++x) {
             const auto v = [&](int ox, int oz) {
-                return vertexAt(static_cast<float>(x + ox) + dx, 0.0f, static_cast<float>(z + oz), color);
+                return upFacingVertex(static_cast<float>(x + ox) + dx, 0.0f, static_cast<float>(z + oz), color);
             };
             out.push_back({{v(0, 0), v(0, 1), v(1, 1)}});
             out.push_back({{v(0, 0), v(1, 1), v(1, 0)}});
@@ -91,7 +87,7 @@ TEST(CellViewsTest, MismatchAllowsAPixelsShiftAndNoMore) {
 
 TEST(CellViewsTest, SplatsCoverDiscsOfTheirDiameterAndAtLeastTheirPixel) {
     CellViews views(kMin, kMax, 16); // 2 units a pixel
-    const storage::PackedVertex point = vertexAt(16.0f, 0.0f, 16.0f, {255, 255, 255, 255});
+    const storage::PackedVertex point = upFacingVertex(16.0f, 0.0f, 16.0f, {255, 255, 255, 255});
     views.drawSplats(std::span(&point, 1), 0.1f);
     EXPECT_EQ(coveredIn(views, 2), 1u);
     CellViews wide(kMin, kMax, 16);
@@ -104,14 +100,14 @@ TEST(CellViewsTest, GeometryFarOutsideTheBoxIsClippedNotOverflowed) {
     // casts), and what lies off the raster draws nothing.
     CellViews views(kMin, kMax, 16);
     const std::array<std::uint8_t, 4> white{255, 255, 255, 255};
-    const storage::PackedTriangle huge{{vertexAt(-1e15f, 0.0f, -1e15f, white), vertexAt(1e15f, 0.0f, -1e15f, white),
-                                         vertexAt(0.0f, 0.0f, 1e15f, white)}};
-    const storage::PackedTriangle edgeOnFar{{vertexAt(-1e20f, 0.0f, 5.0f, white), vertexAt(1e20f, 0.0f, 5.0f, white),
-                                              vertexAt(0.0f, 0.0f, 5.0f, white)}};
+    const storage::PackedTriangle huge{{upFacingVertex(-1e15f, 0.0f, -1e15f, white), upFacingVertex(1e15f, 0.0f, -1e15f, white),
+                                         upFacingVertex(0.0f, 0.0f, 1e15f, white)}};
+    const storage::PackedTriangle edgeOnFar{{upFacingVertex(-1e20f, 0.0f, 5.0f, white), upFacingVertex(1e20f, 0.0f, 5.0f, white),
+                                              upFacingVertex(0.0f, 0.0f, 5.0f, white)}};
     views.drawTriangles(std::vector{huge, edgeOnFar});
     EXPECT_EQ(coveredIn(views, 2), 256u);
     CellViews points(kMin, kMax, 16);
-    const std::vector<storage::PackedVertex> far = {vertexAt(1e30f, 0.0f, 1e30f, white), vertexAt(-1e9f, 0.0f, 4.0f, white)};
+    const std::vector<storage::PackedVertex> far = {upFacingVertex(1e30f, 0.0f, 1e30f, white), upFacingVertex(-1e9f, 0.0f, 4.0f, white)};
     points.drawSplats(far, 4.0f);
     points.drawSplats(far, NAN);
     points.drawSplats(far, 1e30f);
