@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # Renders the README's pictures into docs/images/ with the current Release build: the forest of
-# 64 trees from the demo's near, mid and far views, and three glTF models from ../shared/data.
+# 64 trees from the demo's near, mid and far views, three glTF models from ../shared/data, and a
+# terrain drawn as cubes, stand-ins, splats and every triangle.
 # Run from the repository root after scripts/demo.sh (which builds build-release). Needs
 # oiiotool (Debian: openimageio-tools) to lay the views side by side.
 set -euo pipefail
@@ -30,4 +31,20 @@ for i in "${!models[@]}"; do
     images+=("$work/model$i.png")
 done
 oiiotool "${images[@]}" --mosaic 3x1 -o docs/images/gltf-models.png
-echo "readme_images: docs/images/forest-views.png, docs/images/gltf-models.png"
+# The 4 M terrain at issue 17's view (2.5 radii, 30 degrees about, 20 up, 640 x 480, epsilon 1):
+# color cubes only, the default (stand-ins chosen by measure), splats forced (a file built with
+# splats alone), and brute force; two by two.
+"$ff" build -q --generate terrain:triangles=4000000 --format 2 --stand-ins --splats 8 -o "$work/terrain.ffs"
+"$ff" build -q --generate terrain:triangles=4000000 --format 2 --splats 8 -o "$work/terrain-splats.ffs"
+representation() { # scene image flags...
+    local scene=$1 image=$2
+    shift 2
+    "$ff" render "$work/$scene.ffs" -o "$image" --size 640x480 --distance 2.5 --azimuth 30 --elevation 20 "$@" > /dev/null
+}
+representation terrain "$work/cubes.png" --representation cube
+representation terrain "$work/auto.png"
+representation terrain-splats "$work/splats.png" --representation splats
+representation terrain "$work/full.png" --method full
+oiiotool "$work/cubes.png" "$work/auto.png" "$work/splats.png" "$work/full.png" --mosaic 2x2 --resize 960x720 \
+    -o docs/images/terrain-representations.png
+echo "readme_images: docs/images/forest-views.png, docs/images/gltf-models.png, docs/images/terrain-representations.png"
