@@ -399,32 +399,32 @@ Fetch NodePages::collectPayload(
             return Fetch::Missing;
         }
         out.clear();
-        for (const Payload kind : {Payload::Simplified, Payload::Splats}) {
-            const storage::RepresentationRecord* kept = keptOf(kind);
-            if (kept == nullptr || !view.accepts(kind, kept->parameter))
-                continue;
-            if (drawStandIn(kind, *kept, view, priority, uploads, out) == Fetch::Ready) {
-                drawn = kind;
-                return Fetch::Ready;
+        // The first stand-in `accepted` takes whose pages are ready; `asked` if one is loading.
+        bool asked = false;
+        const auto firstReady = [&](auto&& accepted) {
+            for (const Payload kind : {Payload::Simplified, Payload::Splats}) {
+                const storage::RepresentationRecord* kept = keptOf(kind);
+                if (kept == nullptr || !accepted(kind, kept->parameter))
+                    continue;
+                if (drawStandIn(kind, *kept, view, priority, uploads, out) == Fetch::Ready) {
+                    drawn = kind;
+                    return true;
+                }
+                asked = true;
             }
-        }
+            return false;
+        };
+        if (firstReady([&](Payload kind, float error) { return view.accepts(kind, error); }))
+            return Fetch::Ready;
         if (view.forced && keptOf(view.forcedKind()) == nullptr) {
             // The forced kind is not kept here: the nearest kept one, counted. (A forced kind
             // kept but too coarse to draw without holes is refined instead, below: its
             // children's splats are finer.)
             ++mStats->representationFallbacks;
-            bool loading = false;
-            for (const Payload kind : {Payload::Simplified, Payload::Splats}) {
-                const storage::RepresentationRecord* kept = keptOf(kind);
-                if (kept == nullptr || !view.acceptsInstead(kind, kept->parameter))
-                    continue;
-                if (drawStandIn(kind, *kept, view, priority, uploads, out) == Fetch::Ready) {
-                    drawn = kind;
-                    return Fetch::Ready;
-                }
-                loading = true;
-            }
-            if (!loading) {
+            asked = false;
+            if (firstReady([&](Payload kind, float error) { return view.acceptsInstead(kind, error); }))
+                return Fetch::Ready;
+            if (!asked) {
                 drawn = Payload::Cube; // a forced view's cell has one
                 return Fetch::Ready;
             }
