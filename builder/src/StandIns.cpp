@@ -26,6 +26,34 @@ struct WeldKey {
 };
 static_assert(sizeof(WeldKey) == 20); // no padding: meshopt compares its bytes
 
+/** How many triangles of `indices` have an edge no other triangle uses: the mesh's ring of
+ *  border triangles, which a border-locked simplification keeps. */
+std::size_t borderTriangleCount(std::span<const unsigned> indices) {
+    struct EdgeUse {
+        std::uint64_t edge; // its ends, the smaller first
+        std::size_t triangle;
+    };
+    std::vector<EdgeUse> uses;
+    uses.reserve(indices.size());
+    for (std::size_t t = 0; t < indices.size() / 3; ++t)
+        for (std::size_t c = 0; c < 3; ++c) {
+            const unsigned a = indices[3 * t + c];
+            const unsigned b = indices[3 * t + (c + 1) % 3];
+            uses.push_back({(std::uint64_t{std::min(a, b)} << 32) | std::max(a, b), t});
+        }
+    std::sort(uses.begin(), uses.end(), [](const EdgeUse& x, const EdgeUse& y) { return x.edge < y.edge; });
+    std::vector<bool> onBorder(indices.size() / 3, false);
+    for (std::size_t i = 0; i < uses.size();) {
+        std::size_t j = i + 1;
+        while (j < uses.size() && uses[j].edge == uses[i].edge)
+            ++j;
+        if (j == i + 1)
+            onBorder[uses[i].triangle] = true;
+        i = j;
+    }
+    return static_cast<std::size_t>(std::count(onBorder.begin(), onBorder.end(), true));
+}
+
 bool isInstance(const BuildNode& node) {
     return node.kind == static_cast<std::uint8_t>(storage::NodeKind::Instance);
 }
@@ -62,7 +90,7 @@ CellChoice chooseStandIn(
     std::optional<StandIn> simplified;
     MeasuredStandIn simplifiedMeasured;
     if (kinds.simplified) {
-        simplified = simplifySource(source.triangles, source.error, grid);
+        simplified = simplifySource(source, grid);
         choice.outcome = simplified ? Outcome::Kept : Outcome::NotReducing;
         if (simplified && simplified->triangles.size() > limits.maxTriangles) {
             simplified.reset();
@@ -70,6 +98,10 @@ CellChoice chooseStandIn(
         }
         if (simplified && measure) {
             simplifiedMeasured = measure->measure(*simplified);
+            // Looking worse than it promised, its error is raised, and so is the surface error
+            // its parent starts from.
+            if (simplifiedMeasured.raised > 0)
+                simplified->surfaceError = std::max(simplified->surfaceError, simplifiedMeasured.error);
             simplified->error = simplifiedMeasured.error;
             if (!simplifiedMeasured.pays) {
                 simplified.reset();
@@ -85,20 +117,23 @@ CellChoice chooseStandIn(
     const bool trySplats =
             kinds.splatSpacing > 0 &&
             (!simplified ||
-             (measure && source.error + splatCoverRadius(spacing) < simplified->error * kStandInErrorTie));
+             (measure && source.promised() + splatCoverRadius(spacing) < simplified->error * kStandInErrorTie));
     std::optional<StandIn> splatted;
     MeasuredStandIn splatsMeasured;
     bool splatsNotPaying = false;
     if (trySplats) {
         SplatSet splats;
-        choice.splats = splatSource(source.triangles, spacing, source.error, grid, seed, splats);
+        choice.splats = splatSource(source.triangles, spacing, source.promised(), grid, seed, splats);
         // A point costs about what a triangle does in a page.
         if (choice.splats == SplatOutcome::Kept &&
             splats.points.size() + splats.triangles.size() > limits.maxTriangles)
             choice.splats = SplatOutcome::TooLarge;
         if (choice.splats == SplatOutcome::Kept) {
-            splatted = StandIn{
-                    std::move(splats.triangles), splats.error, StandInKind::Splats, std::move(splats.points)};
+            splatted.emplace();
+            splatted->triangles = std::move(splats.triangles);
+            splatted->error = splats.error;
+            splatted->kind = StandInKind::Splats;
+            splatted->points = std::move(splats.points);
             if (measure) {
                 splatsMeasured = measure->measure(*splatted);
                 splatted->error = splatsMeasured.error;
@@ -132,10 +167,8 @@ CellChoice chooseStandIn(
 
 } // namespace
 
-std::optional<StandIn> simplifySource(
-        std::span<const storage::PackedTriangle> source,
-        float baseError,
-        const storage::PositionGrid& grid) {
+std::optional<StandIn> simplifySource(const StandInSource& from, const storage::PositionGrid& grid) {
+    const std::span<const storage::PackedTriangle> source = from.triangles;
     if (source.size() < kMinStandInSource)
         return std::nullopt;
     // Weld the corners on the grid, as the encoder will: the simplifier sees the mesh's real
@@ -168,31 +201,33 @@ std::optional<StandIn> simplifySource(
     if (triangles < kMinStandInSource)
         return std::nullopt;
 
-    const auto target = static_cast<std::size_t>(static_cast<double>(triangles) * kStandInTargetShare) * 3;
-    std::vector<unsigned> kept(indices.size());
+    // The border locked: its ring of triangles stays whole, and the interior is simplified to
+    // a share of what the children draw. No error limit: the stand-in records what it reached,
+    // and the runtime draws it only where that error is below ε pixels.
+    const std::uint64_t childrenDraw = from.drawnTriangles > 0 ? from.drawnTriangles : triangles;
+    const auto target = static_cast<std::size_t>(static_cast<double>(childrenDraw) * kStandInTargetShare);
     float relativeError = 0.0f;
-    // No error limit: the stand-in records what it reached, and the runtime draws it only from
-    // where that error is below ε pixels.
-    const std::size_t keptIndices = meshopt_simplify(
+    std::vector<unsigned> kept(indices.size());
+    kept.resize(meshopt_simplify(
             kept.data(),
             indices.data(),
             indices.size(),
             vertices[0].position.data(),
             unique,
             sizeof(storage::PackedVertex),
-            target,
+            std::min((target + borderTriangleCount(indices)) * 3, indices.size()),
             1.0f,
             meshopt_SimplifyLockBorder,
-            &relativeError);
-    if (keptIndices == 0 ||
-        static_cast<double>(keptIndices / 3) > kMaxStandInShare * static_cast<double>(triangles))
+            &relativeError));
+    if (kept.empty() || static_cast<double>(kept.size() / 3) > kMaxStandInShare * static_cast<double>(childrenDraw))
         return std::nullopt;
 
-    kept.resize(keptIndices);
     const float scale = meshopt_simplifyScale(vertices[0].position.data(), unique, sizeof(storage::PackedVertex));
     StandIn out;
-    out.error = baseError + std::max(relativeError * scale, shadingError(vertices, indices, kept));
-    out.triangles.resize(keptIndices / 3);
+    out.surfaceError = from.error + relativeError * scale;
+    out.shadingError = std::max(from.shadingError, shadingError(vertices, indices, kept));
+    out.error = std::max(out.surfaceError, out.shadingError);
+    out.triangles.resize(kept.size() / 3);
     for (std::size_t t = 0; t < out.triangles.size(); ++t)
         for (std::size_t c = 0; c < 3; ++c)
             out.triangles[t].vertices[c] = vertices[kept[3 * t + c]];
@@ -254,6 +289,7 @@ Result<std::vector<std::optional<StandIn>>> buildStandIns(
     std::vector<Outcome> outcomes(nodes.size(), Outcome::None);
     std::vector<SplatOutcome> splatOutcomes(nodes.size(), SplatOutcome::Empty);
     std::vector<StandInCounts> measuredCounts(nodes.size());
+    std::vector<float> largestBelow(nodes.size(), 0.0f); // the largest stand-in error in each subtree
     for (std::size_t d = byDepth.size(); d-- > 0;) {
         const std::vector<std::uint32_t>& level = byDepth[d];
         FF_RETURN_IF_ERROR(parallelFor(level.size(), threads, [&] {
@@ -274,14 +310,19 @@ Result<std::vector<std::optional<StandIn>>> buildStandIns(
                     return Status::ok();
                 }
                 std::size_t size = node.triangleCount;
+                source.drawnTriangles = node.triangleCount;
+                for (std::uint32_t c = 0; c < node.childCount; ++c)
+                    largestBelow[n] = std::max(largestBelow[n], largestBelow[node.firstChild + c]);
                 for (std::uint32_t c = 0; c < node.childCount; ++c) {
                     const StandInSource& child = sources[node.firstChild + c];
                     source.usable = source.usable && child.usable;
                     size += child.triangles.size();
                     source.error = std::max(source.error, child.error);
+                    source.shadingError = std::max(source.shadingError, child.shadingError);
+                    source.drawnTriangles += child.drawnTriangles;
                 }
                 if (!source.usable || size > kMaxStandInSource) {
-                    source = StandInSource{{}, 0.0f, false};
+                    source = StandInSource{{}, 0.0f, false, 0.0f, 0};
                     outcomes[n] = Outcome::TooLarge;
                     return Status::ok();
                 }
@@ -307,10 +348,17 @@ Result<std::vector<std::optional<StandIn>>> buildStandIns(
                 splatOutcomes[n] = choice.splats;
                 measuredCounts[n] = choice.counts;
                 if (choice.standIn) {
+                    // Never below a stand-in under it (a child's splats add their cover radius
+                    // to the source they share with this cell).
+                    choice.standIn->error = std::max(choice.standIn->error, largestBelow[n]);
+                    largestBelow[n] = choice.standIn->error;
                     standIns[n] = std::move(choice.standIn);
                     if (standIns[n]->kind == StandInKind::Simplified) {
+                        // Its parent simplifies what it keeps, from its errors.
                         source.triangles = standIns[n]->triangles;
-                        source.error = standIns[n]->error;
+                        source.error = standIns[n]->surfaceError;
+                        source.shadingError = standIns[n]->shadingError;
+                        source.drawnTriangles = standIns[n]->triangles.size();
                     }
                 }
                 return Status::ok(); // the parent splats or simplifies this source whole

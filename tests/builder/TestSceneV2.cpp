@@ -484,13 +484,15 @@ TEST(SceneV2Test, StandInsHalveWhatTheySimplifyAndTheirErrorsGrowUpTheTree) {
 }
 
 TEST(SceneV2Test, MeasuredChoiceKeepsOnlyTheStandInsThatKeepTheirShape) {
-    // A small cathedral (arcades, pillars, a vault): by rule every simplification that halves
-    // its source is kept; measured from the cell's six sides, one keeps its outline only where
-    // its cell spans under two pixels, and is not.
+    // A small cathedral (arcades, pillars, a vault) with simplified copies and splats: by rule a
+    // cell whose simplified copy is too large for its page keeps splats; measured from the
+    // cell's six sides, splats keep its outline only where it spans under two pixels, and none
+    // are kept.
     const fs::path dir = freshTestDir();
     const RecordingSink scene = generate("cathedral:bays=3");
     BuildOptions rule = v2Options();
     rule.hierarchy.standIns = true;
+    rule.hierarchy.splatSpacing = 8;
     rule.hierarchy.measureStandIns = false;
     BuildOptions measured = rule;
     measured.hierarchy.measureStandIns = true;
@@ -498,9 +500,10 @@ TEST(SceneV2Test, MeasuredChoiceKeepsOnlyTheStandInsThatKeepTheirShape) {
     const BuildReport byMeasure = buildOrFail(scene, dir / "measured.ffs", measured);
     EXPECT_FALSE(byRule.standInsMeasured);
     EXPECT_TRUE(byMeasure.standInsMeasured);
-    EXPECT_GT(byRule.standInNodes, 0u);
-    EXPECT_EQ(byRule.standInsNotPaying, 0u);
-    EXPECT_GT(byMeasure.standInsNotPaying, 0u);
+    EXPECT_GT(byRule.splatNodes, 0u);
+    EXPECT_EQ(byRule.splatsNotPaying, 0u);
+    EXPECT_GT(byMeasure.splatsNotPaying, 0u);
+    EXPECT_EQ(byMeasure.splatNodes, 0u);
     EXPECT_LT(byMeasure.standInNodes, byRule.standInNodes);
     EXPECT_LT(byMeasure.fileBytes, byRule.fileBytes);
     auto file = openOrFail(dir / "measured.ffs");

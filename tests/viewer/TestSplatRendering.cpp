@@ -123,9 +123,10 @@ TEST(SplatRenderingTest, SplatsLeaveNoHolesOnAClosedSurface) {
 
 TEST(SplatRenderingTest, EachRepresentationCanBeForcedAndEpsilonZeroDrawsNone) {
     const fs::path dir = freshTestDir();
-    // A sphere's cells keep simplified stand-ins, but its root's simplification does not pay:
-    // by rule it keeps splats, drawn from afar (measured, they do not pay either).
-    const fs::path scene = buildSphere(dir, {"--stand-ins", "--splats", "8", "--stand-in-choice", "rule"});
+    // A sphere's cells keep simplified stand-ins, but in pages of 4 KiB the upper cells' are too
+    // large: by rule those keep splats, drawn from afar (measured, they do not pay).
+    const fs::path scene = buildSphere(
+            dir, {"--stand-ins", "--splats", "8", "--stand-in-choice", "rule", "--page-size", "4096"});
     const std::vector<std::string> common = {"--size", "320x240", "--coverage-alpha", "--distance", "48"};
     const auto drawnWith = [&](const std::vector<std::string>& extra,
                                const std::string& label,
