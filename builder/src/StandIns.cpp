@@ -206,6 +206,7 @@ std::optional<StandIn> simplifySource(const StandInSource& from, const storage::
     // and the runtime draws it only where that error is below ε pixels.
     const std::uint64_t childrenDraw = from.drawnTriangles > 0 ? from.drawnTriangles : triangles;
     const auto target = static_cast<std::size_t>(static_cast<double>(childrenDraw) * kStandInTargetShare);
+    const std::size_t ring = borderTriangleCount(indices);
     float relativeError = 0.0f;
     std::vector<unsigned> kept(indices.size());
     kept.resize(meshopt_simplify(
@@ -215,7 +216,7 @@ std::optional<StandIn> simplifySource(const StandInSource& from, const storage::
             vertices[0].position.data(),
             unique,
             sizeof(storage::PackedVertex),
-            std::min((target + borderTriangleCount(indices)) * 3, indices.size()),
+            std::min((target + ring) * 3, indices.size()),
             1.0f,
             meshopt_SimplifyLockBorder,
             &relativeError));

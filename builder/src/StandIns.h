@@ -7,7 +7,7 @@
 // each child's stand-in (or, where a child kept none, that child's source; a leaf below the
 // root keeps none: its parent simplifies its triangles); the source is
 // simplified with meshoptimizer (meshopt_simplify, its quadric error) with the mesh's border
-// locked, to a fifth of what its children draw besides the border's ring of triangles, and kept
+// locked, to 0.22 of what its children draw besides the border's ring of triangles, and kept
 // when that pays (at most 0.6 x). A cell's border is where its neighbours' triangles begin, so
 // the edges there are the original ones on both sides, whatever level either side is drawn at:
 // stand-ins never open cracks. Surface errors add up the tree (a node's is its children's
@@ -96,13 +96,14 @@ inline constexpr std::size_t kMaxCarriedStandInSource = 1u << 14;
 inline constexpr double kMaxStandInShare = 0.6;
 /** The share of what its children draw (StandInSource::drawnTriangles) a stand-in aims for,
  *  besides its ring of border triangles, which it keeps at the leaves' density. A quarter would
- *  keep a surface's stand-ins as large as their children's (four children a level); a fifth
- *  draws about as much (the 4 M terrain at issue 17's view: 0.18 M triangles against 0.17 M,
- *  16 M: 0.43 M against 0.41 M) for 40-43 % of the geometry's bytes instead of 50-52 %. Aimed
- *  at a share of the whole source (the children's copies with their rings), a far cell's ring
+ *  keep a surface's stand-ins as large as their children's (four children a level) but cost
+ *  +50-52 % of the terrain's geometry bytes (issue 17 allows +50 %); a fifth +40-43 %, but the
+ *  molecule's atoms (one-node prototypes, a fifth of a sphere) then showed their outlines 2.25 dB
+ *  below brute force at 2.5 radii (issue 17 allows 2; a quarter 1.40, 0.22 1.88). Aimed at a
+ *  share of the whole source instead (the children's copies with their rings), a far cell's ring
  *  took most of it and its interior was simplified the more: its errors grew up the tree faster
- *  than its cells and the frame drew 0.24 M and 0.70 M. */
-inline constexpr double kStandInTargetShare = 0.2;
+ *  than its cells (the 4 M terrain's frame at issue 17's view drew 0.24 M triangles, not 0.18 M). */
+inline constexpr double kStandInTargetShare = 0.22;
 
 /**
  * Simplifies `source` (welded on `grid`'s coordinates, so as the cluster encoder sees it) with

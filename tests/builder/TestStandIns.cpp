@@ -84,9 +84,9 @@ TEST(StandInTest, SurfaceErrorsAddUpTheTreeAndShadingErrorsDoNot) {
     EXPECT_FLOAT_EQ(standIn->error, 5.0f) << "the larger of the two";
 }
 
-TEST(StandInTest, AStandInAimsAtAFifthOfWhatItsChildrenDrawBesidesItsRing) {
+TEST(StandInTest, AStandInAimsAtAShareOfWhatItsChildrenDrawBesidesItsRing) {
     // A wavy sheet, so simplification stops at its target rather than at its ring. Drawn
-    // whole by its children, or by children drawing half of it: a fifth of that, plus the ring
+    // whole by its children, or by children drawing half of it: kStandInTargetShare of that, plus the ring
     // of triangles along the locked border (two a border cell but at the corners).
     const storage::PositionGrid grid = gridFor();
     std::vector<storage::PackedTriangle> source =
