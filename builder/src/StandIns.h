@@ -91,7 +91,7 @@ inline constexpr std::size_t kMinStandInSource = 256;
 /** A chunk's root hands at most this many triangles up to the tree above the chunks, which
  *  holds every chunk's at once (else the tree above gets no stand-ins): 1 MiB a chunk. */
 inline constexpr std::size_t kMaxCarriedStandInSource = 1u << 14;
-/** A stand-in must keep at most this share of its source's triangles, or it is not kept
+/** A stand-in must keep at most this share of what its children draw, or it is not kept
  *  (issue 17: each level at most 0.6 x its children's). */
 inline constexpr double kMaxStandInShare = 0.6;
 /** The share of what its children draw (StandInSource::drawnTriangles) a stand-in aims for,
@@ -102,7 +102,8 @@ inline constexpr double kMaxStandInShare = 0.6;
  *  below brute force at 2.5 radii (issue 17 allows 2; a quarter 1.40, 0.22 1.88). Aimed at a
  *  share of the whole source instead (the children's copies with their rings), a far cell's ring
  *  took most of it and its interior was simplified the more: its errors grew up the tree faster
- *  than its cells (the 4 M terrain's frame at issue 17's view drew 0.24 M triangles, not 0.18 M). */
+ *  than its cells (the 4 M terrain's frame at issue 17's view drew 0.24 M triangles against
+ *  0.18 M at a fifth). */
 inline constexpr double kStandInTargetShare = 0.22;
 
 /**
