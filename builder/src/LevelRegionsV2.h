@@ -120,7 +120,7 @@ private:
         std::vector<storage::RepresentationRecord>
                 representations; ///< local pages of region `level`
         std::uint64_t storedTriangles = 0;
-        StandInSource standInSource{{}, 0.0f, false, 0.0f, 0}; ///< for a stand-in above it
+        StandInSource standInSource = StandInSource::unusable(); ///< for a stand-in above it
         double drawnTriangles = 0.0;
         double unlitTriangles = 0.0; ///< of drawnTriangles
         std::uint32_t absoluteFirstChild = 0; ///< set by finish()

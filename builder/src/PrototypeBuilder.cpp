@@ -114,7 +114,7 @@ Result<ChunkOutput> buildChunk(
     if (positionGrid != nullptr)
         FF_RETURN_IF_ERROR(shapeLeavesV2(built.nodes, triangles, leafShapeV2(params, *positionGrid, 1)));
     std::vector<std::optional<StandIn>> standIns;
-    StandInSource rootSource{{}, 0.0f, false, 0.0f, 0};
+    StandInSource rootSource = StandInSource::unusable();
     if (positionGrid != nullptr && params.anyStandIns()) {
         FF_ASSIGN_OR_RETURN(
                 standIns,
@@ -129,7 +129,7 @@ Result<ChunkOutput> buildChunk(
                         {maxStandInTriangles(pageSize), false},
                         standInKinds(params)));
         if (rootSource.triangles.size() > kMaxCarriedStandInSource)
-            rootSource = StandInSource{{}, 0.0f, false, 0.0f, 0};
+            rootSource = StandInSource::unusable();
     }
     out.encoded = encodeLevels(std::move(built.nodes), std::move(triangles), std::move(standIns));
     out.encoded.rootSource = std::move(rootSource);

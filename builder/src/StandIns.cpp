@@ -201,11 +201,10 @@ std::optional<StandIn> simplifySource(const StandInSource& from, const storage::
     if (triangles < kMinStandInSource)
         return std::nullopt;
 
-    // The border locked: its ring of triangles stays whole, and the interior is simplified to
-    // a share of what the children draw. No error limit: the stand-in records what it reached,
-    // and the runtime draws it only where that error is below ε pixels.
-    const std::uint64_t childrenDraw = from.drawnTriangles > 0 ? from.drawnTriangles : triangles;
-    const auto target = static_cast<std::size_t>(static_cast<double>(childrenDraw) * kStandInTargetShare);
+    // The border locked: its ring of triangles stays whole, and the rest is simplified towards
+    // a share of the source (what the children draw). No error limit: the stand-in records
+    // what it reached, and the runtime draws it only where that error is below ε pixels.
+    const auto target = static_cast<std::size_t>(static_cast<double>(source.size()) * kStandInTargetShare);
     const std::size_t ring = borderTriangleCount(indices);
     float relativeError = 0.0f;
     std::vector<unsigned> kept(indices.size());
@@ -220,7 +219,7 @@ std::optional<StandIn> simplifySource(const StandInSource& from, const storage::
             1.0f,
             meshopt_SimplifyLockBorder,
             &relativeError));
-    if (kept.empty() || static_cast<double>(kept.size() / 3) > kMaxStandInShare * static_cast<double>(childrenDraw))
+    if (kept.empty() || static_cast<double>(kept.size() / 3) > kMaxStandInShare * static_cast<double>(source.size()))
         return std::nullopt;
 
     const float scale = meshopt_simplifyScale(vertices[0].position.data(), unique, sizeof(storage::PackedVertex));
@@ -311,7 +310,6 @@ Result<std::vector<std::optional<StandIn>>> buildStandIns(
                     return Status::ok();
                 }
                 std::size_t size = node.triangleCount;
-                source.drawnTriangles = node.triangleCount;
                 for (std::uint32_t c = 0; c < node.childCount; ++c)
                     largestBelow[n] = std::max(largestBelow[n], largestBelow[node.firstChild + c]);
                 for (std::uint32_t c = 0; c < node.childCount; ++c) {
@@ -320,10 +318,9 @@ Result<std::vector<std::optional<StandIn>>> buildStandIns(
                     size += child.triangles.size();
                     source.error = std::max(source.error, child.error);
                     source.shadingError = std::max(source.shadingError, child.shadingError);
-                    source.drawnTriangles += child.drawnTriangles;
                 }
                 if (!source.usable || size > kMaxStandInSource) {
-                    source = StandInSource{{}, 0.0f, false, 0.0f, 0};
+                    source = StandInSource::unusable();
                     outcomes[n] = Outcome::TooLarge;
                     return Status::ok();
                 }
@@ -359,7 +356,6 @@ Result<std::vector<std::optional<StandIn>>> buildStandIns(
                         source.triangles = standIns[n]->triangles;
                         source.error = standIns[n]->surfaceError;
                         source.shadingError = standIns[n]->shadingError;
-                        source.drawnTriangles = standIns[n]->triangles.size();
                     }
                 }
                 return Status::ok(); // the parent splats or simplifies this source whole

@@ -7,8 +7,8 @@
 // each child's stand-in (or, where a child kept none, that child's source; a leaf below the
 // root keeps none: its parent simplifies its triangles); the source is
 // simplified with meshoptimizer (meshopt_simplify, its quadric error) with the mesh's border
-// locked, to 0.22 of what its children draw besides the border's ring of triangles, and kept
-// when that pays (at most 0.6 x). A cell's border is where its neighbours' triangles begin, so
+// locked, to its ring of border triangles plus 0.22 of the source, and kept when that pays (at
+// most 0.6 x). A cell's border is where its neighbours' triangles begin, so
 // the edges there are the original ones on both sides, whatever level either side is drawn at:
 // stand-ins never open cracks. Surface errors add up the tree (a node's is its children's
 // largest plus its own step), shading errors do not (StandInSource), and a node's error is
@@ -45,15 +45,13 @@ struct StandInSource {
     /** Hierarchy units: how far its shading may have drifted (StandInError.h), the largest of
      *  its levels', not their sum: a simplification keeps the original vertices it keeps, with
      *  their own colours and normals, and a level's drift is measured on the original vertices
-     *  it removed. Summed, the 4 M terrain's root promised 86 units where this gives 42
-     *  (methods §12). */
+     *  it removed (measured: methods §12). */
     float shadingError = 0.0f;
-    /** Triangles drawn in its place: the subtree's own and its children's, or a kept
-     *  stand-in's (kStandInTargetShare). 0: the triangles' own count. */
-    std::uint64_t drawnTriangles = 0;
 
     /** The error a copy of it promises: the larger of the two. */
     float promised() const noexcept { return std::max(error, shadingError); }
+    /** A subtree no ancestor simplifies (`usable` false). */
+    static StandInSource unusable() { return {{}, 0.0f, false, 0.0f}; }
 };
 
 /** What a stand-in draws its subtree with. */
@@ -91,25 +89,23 @@ inline constexpr std::size_t kMinStandInSource = 256;
 /** A chunk's root hands at most this many triangles up to the tree above the chunks, which
  *  holds every chunk's at once (else the tree above gets no stand-ins): 1 MiB a chunk. */
 inline constexpr std::size_t kMaxCarriedStandInSource = 1u << 14;
-/** A stand-in must keep at most this share of what its children draw, or it is not kept
- *  (issue 17: each level at most 0.6 x its children's). */
+/** A stand-in must keep at most this share of its source's triangles (what its children
+ *  draw), or it is not kept (issue 17: each level at most 0.6 x its children's). */
 inline constexpr double kMaxStandInShare = 0.6;
-/** The share of what its children draw (StandInSource::drawnTriangles) a stand-in aims for,
- *  besides its ring of border triangles, which it keeps at the leaves' density. A quarter would
- *  keep a surface's stand-ins as large as their children's (four children a level) but cost
- *  +50-52 % of the terrain's geometry bytes (issue 17 allows +50 %); a fifth +40-43 %, but the
- *  molecule's atoms (one-node prototypes, a fifth of a sphere) then showed their outlines 2.25 dB
- *  below brute force at 2.5 radii (issue 17 allows 2; a quarter 1.40, 0.22 1.88). Aimed at a
- *  share of the whole source instead (the children's copies with their rings), a far cell's ring
- *  took most of it and its interior was simplified the more: its errors grew up the tree faster
- *  than its cells (the 4 M terrain's frame at issue 17's view drew 0.24 M triangles against
- *  0.18 M at a fifth). */
+/** The share of its source a stand-in aims for, on top of its ring of border triangles, which
+ *  the border lock keeps whole at the leaves' density. With the ring inside the share (before),
+ *  a far cell's ring took most of it and its interior was simplified the more: its errors grew
+ *  up the tree faster than its cells, and the 4 M terrain's frame at issue 17's view drew 0.24 M
+ *  triangles against 0.18 M with the ring on top (at a fifth). A quarter on top costs +50-52 %
+ *  of the terrain's geometry bytes (issue 17 allows +50 %); a fifth +40-43 %, but the
+ *  molecule's atoms (one-node prototypes, a fifth of a sphere) then showed their outlines
+ *  2.25 dB below brute force at 2.5 radii (issue 17 allows 2; a quarter 1.40, 0.22 1.88). */
 inline constexpr double kStandInTargetShare = 0.22;
 
 /**
  * Simplifies `source` (welded on `grid`'s coordinates, so as the cluster encoder sees it) with
- * its border locked to its ring and kStandInTargetShare of what its children draw. nullopt when
- * it keeps more than kMaxStandInShare of that. Its surface error is `source`'s plus the
+ * its border locked to its ring and kStandInTargetShare of its triangles. nullopt when it keeps
+ * more than kMaxStandInShare of them. Its surface error is `source`'s plus the
  * simplification's, its shading error the larger of `source`'s and the simplification's.
  */
 [[nodiscard]] std::optional<StandIn> simplifySource(const StandInSource& source, const storage::PositionGrid& grid);

@@ -72,7 +72,7 @@ struct LevelledSubtree {
     BuildNode root;
     std::optional<StandIn> rootStandIn; ///< format 2: the root's, if it has one
     /** Format 2: what the root's subtree gives a stand-in above it. */
-    StandInSource rootSource{{}, 0.0f, false, 0.0f, 0};
+    StandInSource rootSource = StandInSource::unusable();
     std::uint64_t nodeCount = 0; ///< records in levels (the root not included)
     std::uint32_t maxLevel = 0;  ///< deepest level
 };

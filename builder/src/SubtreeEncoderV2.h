@@ -57,7 +57,7 @@ struct PlacedNodeV2 {
     double drawnTriangles = 0.0;                                ///< its own and all below it
     double unlitTriangles = 0.0;                                ///< of drawnTriangles
     /** What its subtree gives a stand-in above it (StandIns.h); unusable if none was built. */
-    StandInSource standInSource{{}, 0.0f, false, 0.0f, 0};
+    StandInSource standInSource = StandInSource::unusable();
 };
 
 /** kNodeV2Unlit for a Cell whose triangles, its own and all below it, are all unlit (none:
