@@ -35,6 +35,17 @@ constexpr std::uint32_t kHistoryFrames = 64;
 /** Nodes hidden at this many tests in a row are tested together (CHC++'s multiqueries group
  *  the nodes likely to stay hidden; a group found visible costs a test per node again). */
 constexpr std::uint16_t kStableHiddenTests = 2;
+/** On a frame without history a node is held, too, behind a nearer box wholly in front of it
+ *  that shares part of its screen rectangle (the atoms of a dense volume, layer behind layer,
+ *  whose boxes never overlap), until the frame has waited this many times for an answer. Every
+ *  hold is a round trip through llvmpipe: one-shot frames, against holding by overlapping
+ *  boxes only, the 100 k-atom molecule 0.8 s and 2.4 M triangles against 1.7 s and 5-5.8 M,
+ *  the city from the street 6 % faster, the cathedral's nave 5-9 % slower and its aisle 4 %
+ *  faster; without the limit the forest from inside waited 880 times and took 25 % longer.
+ *  With history the nodes in front are mostly drawn untested (visible last frame): held on
+ *  every frame, the city's walk waited three times as often (17 a frame against 6) and took
+ *  17 % longer. */
+constexpr std::uint32_t kHeldBehindWaits = 32;
 /** A camera that turned more than this since the last frame, or moved more than this share of
  *  its distance to the scene's centre (at least a tenth of the scene's diagonal, for an eye near
  *  the centre), jumped: what was visible there says little here, and drawn untested it would
@@ -142,8 +153,14 @@ struct OcclusionTraversal::Impl {
         Entry entry;
         std::uint32_t slot;
         float projected;
-        glm::vec3 worldMin{0.0f}; ///< its test box's world bounds (set when it is queued)
+        /** Its test box (set when it is queued): world bounds, screen rectangle (normalised
+         *  device coordinates) and depth range (view space, along the view direction). */
+        glm::vec3 worldMin{0.0f};
         glm::vec3 worldMax{0.0f};
+        glm::vec2 screenMin{0.0f};
+        glm::vec2 screenMax{0.0f};
+        float depthMin = 0.0f;
+        float depthMax = 0.0f;
     };
     struct Query {
         QueryTicket ticket;
@@ -269,6 +286,8 @@ struct OcclusionTraversal::Impl {
     glm::mat4 view{1.0f};
     glm::mat4 viewProjection{1.0f};
     bool depthWritten = false; ///< some geometry reached GL this frame: tests have occluders
+    bool withoutHistory = false; ///< the first frame or one after a jump
+    std::uint32_t waits = 0;     ///< answers waited for this frame
     std::uint32_t batchNumber = 0;
     DrawList list;
     std::vector<Transform> transforms;
@@ -356,6 +375,8 @@ Status OcclusionTraversal::Impl::traverse(
     if (lastCamera && jumped(*lastCamera, frame->camera, toVec3(header.boundsMin), toVec3(header.boundsMax)))
         history.clear();
     lastCamera = frame->camera;
+    withoutHistory = history.empty();
+    waits = 0;
     nodePages.beginFrame();
     nodePages.countInto(frameStats);
     failures.clear();
@@ -405,8 +426,10 @@ Status OcclusionTraversal::Impl::traverse(
                 stats->occlusionMs += millisecondsSince(asked);
                 break;
             }
-            if (idle && !tester.ready(pending.front().ticket))
+            if (idle && !tester.ready(pending.front().ticket)) {
                 ++stats->queriesWaited;
+                ++waits;
+            }
             const Query query = pending.front();
             pending.pop_front();
             const bool visible = tester.anyVisible(query.ticket);
@@ -696,9 +719,20 @@ void OcclusionTraversal::Impl::queueForTest(Tested node) {
     }
     node.worldMin = glm::vec3(INFINITY);
     node.worldMax = glm::vec3(-INFINITY);
+    node.screenMin = glm::vec2(INFINITY);
+    node.screenMax = glm::vec2(-INFINITY);
+    node.depthMin = INFINITY;
+    node.depthMax = -INFINITY;
     for (const glm::vec3& corner : box.corners) {
         node.worldMin = glm::min(node.worldMin, corner);
         node.worldMax = glm::max(node.worldMax, corner);
+        const glm::vec4 clip = viewProjection * glm::vec4(corner, 1.0f);
+        const glm::vec2 ndc = glm::vec2(clip) / clip.w; // in front of the eye: testable()
+        node.screenMin = glm::min(node.screenMin, ndc);
+        node.screenMax = glm::max(node.screenMax, ndc);
+        const float depth = -(view * glm::vec4(corner, 1.0f)).z;
+        node.depthMin = std::min(node.depthMin, depth);
+        node.depthMax = std::max(node.depthMax, depth);
     }
     if (behindUnanswered(node)) {
         held.push_back(node);
@@ -709,9 +743,18 @@ void OcclusionTraversal::Impl::queueForTest(Tested node) {
 
 bool OcclusionTraversal::Impl::behindUnanswered(const Tested& node) const {
     const auto inFront = [&](const Tested& other) {
-        return other.entry.distance < node.entry.distance &&
-               glm::all(glm::lessThanEqual(other.worldMin, node.worldMax)) &&
-               glm::all(glm::lessThanEqual(node.worldMin, other.worldMax));
+        if (!(other.entry.distance < node.entry.distance))
+            return false;
+        const bool overlapOnScreen = glm::all(glm::lessThanEqual(other.screenMin, node.screenMax)) &&
+                                     glm::all(glm::lessThanEqual(node.screenMin, other.screenMax));
+        if (!overlapOnScreen)
+            return false;
+        const bool overlapInSpace = glm::all(glm::lessThanEqual(other.worldMin, node.worldMax)) &&
+                                    glm::all(glm::lessThanEqual(node.worldMin, other.worldMax));
+        // Wholly in front of it on screen, a nearer box may hide it too: on a frame without
+        // history, until kHeldBehindWaits.
+        return overlapInSpace ||
+               (withoutHistory && waits < kHeldBehindWaits && other.depthMax <= node.depthMin);
     };
     if (std::any_of(waiting.begin(), waiting.end(), inFront))
         return true;

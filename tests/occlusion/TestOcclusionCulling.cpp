@@ -223,6 +223,45 @@ TEST_P(BothBackends, WhatIsBehindAWallNeverReachesGl) {
     }
 }
 
+/** Two layers of statues (each the box [-0.5, 0.5]³ with faces of n x n quads), 6 x 6 side by
+ *  side at z = 0 and the same 3 units behind: the front layer hides the back one whole from the
+ *  +z axis, yet no box of one layer overlaps a box of the other. */
+constexpr int kLayerSide = 6;
+fs::path buildTwoLayersOfStatues(const fs::path& dir) {
+    return buildScene(dir / "layers.ffs", [](builder::SceneBuilder& scene) {
+        auto statue = scene.addPrototype("statue");
+        EXPECT_TRUE(scene.addTriangles(*statue, boxSurface(glm::vec3(-0.5f), glm::vec3(0.5f), kStatueSubdivision))
+                            .isOk());
+        for (const double z : {0.0, -3.0}) {
+            for (int x = 0; x < kLayerSide; ++x) {
+                for (int y = 0; y < kLayerSide; ++y) {
+                    glm::dmat4 at(1.0);
+                    at[3] = glm::dvec4(x - 0.5 * (kLayerSide - 1), y - 0.5 * (kLayerSide - 1), z, 1.0);
+                    EXPECT_TRUE(scene.addInstance(*statue, at).isOk());
+                }
+            }
+        }
+    });
+}
+
+TEST_P(BothBackends, AFrameWithoutHistoryTestsWhatIsBehindOnlyOnceWhatIsInFrontIsDrawn) {
+    // The first frame has no history: every statue is tested. At ε = 0 a node is tested by its
+    // tight bounds, which overlap nothing of the other layer. Tested in the same batch as the
+    // front layer, the back layer would see none of it drawn yet and be drawn too; a node whose
+    // box lies behind a nearer one waiting for its answer, on screen, waits for it instead.
+    open(buildTwoLayersOfStatues(freshDir()));
+    const Camera front = Camera::lookAt({0, 0, 12}, {0, 0, 0}, {0, 1, 0}, 0.8f);
+    auto reference = mPlain->render(frame(front, 0.0f, false));
+    ASSERT_TRUE(reference.isOk()) << reference.status().toString();
+    constexpr std::uint64_t kLayer = kLayerSide * kLayerSide * kStatueTriangles;
+    ASSERT_EQ(reference->stats.trianglesDrawn, 2 * kLayer);
+    auto culled = mCulling->render(frame(front, 0.0f, true));
+    ASSERT_TRUE(culled.isOk()) << culled.status().toString();
+    EXPECT_EQ(culled->stats.trianglesDrawn, kLayer);
+    EXPECT_GE(culled->stats.nodesOccluded, 1u);
+    EXPECT_LE(differingPixels(culled->image, reference->image), allowedPixels(culled->image));
+}
+
 TEST_P(BothBackends, OpaqueCubesOcclude) {
     // At ε = 64 each tile (about 47 pixels wide) is drawn as its color cube, whose face toward
     // the eye is covered whole (alpha 1); the statue behind is too large to be one.
@@ -464,17 +503,23 @@ TEST_F(OcclusionCullingTest, ACompleteFrameRemembersOnlyItsLastPass) {
     FrameContext coherent = frame(walk[0], 0.0f, true);
     FrameContext testsEveryNode = coherent;
     testsEveryNode.occlusion.coherent = false;
+    std::uint64_t firstFrame = 0;
     for (int f = 0; f < 3; ++f) {
         SCOPED_TRACE("frame " + std::to_string(f));
         auto withHistory = mCulling->render(coherent);
         ASSERT_TRUE(withHistory.isOk()) << withHistory.status().toString();
         auto without = mOrderOnly->render(testsEveryNode);
         ASSERT_TRUE(without.isOk()) << without.status().toString();
-        // A still camera: the history holds what was visible, so coherence draws what testing
-        // every node draws (before the fix: 104,660 triangles against 4,448).
+        if (f == 0)
+            firstFrame = without->stats.trianglesDrawn;
+        // A still camera: the history holds what the complete first frame found visible, so
+        // coherence draws what that frame drew (before the fix: 104,660 triangles against
+        // 4,448). Not what testing every node draws on the frames after: without history the
+        // walk holds more nodes back, in another order (OcclusionTraversal.cpp,
+        // kHeldBehindWaits), and its answers differ (here 5,144 triangles against 4,448).
         EXPECT_LE(
                 static_cast<double>(withHistory->stats.trianglesDrawn),
-                1.1 * static_cast<double>(without->stats.trianglesDrawn));
+                1.1 * static_cast<double>(firstFrame));
         EXPECT_EQ(differingPixels(withHistory->image, without->image), 0u);
     }
 }

@@ -27,7 +27,9 @@ namespace ff::runtime {
  *     - a node whose box overlaps the box of a nearer node still waiting for its answer is held
  *       back until that answer is in (and what it drew is flushed): tested beside it, it would
  *       not see what it may hide behind — a building's furniture beside its walls, on every
- *       frame without history;
+ *       frame without history. On such a frame (the first, a jump) a node is held, too, behind
+ *       a box wholly in front of it that covers part of its screen rectangle: the atoms of a
+ *       dense volume, layer behind layer, whose boxes never overlap;
  *     - visibility is pulled up from what was drawn: an inner node none of whose subtree was
  *       seen is tested as a whole next frame.
  *     History decides only when a node is tested, never that it is skipped: a node is skipped
