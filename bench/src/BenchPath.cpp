@@ -180,7 +180,8 @@ Status runPath(const PathParams& p, const Scenario& scenario, const BenchOptions
              "mean_queries",
              "mean_queries_waited",
              "mean_nodes_occluded",
-             "fps"});
+             "fps",
+             "mean_triangles_occluded"});
     for (const MethodSpec& method : p.methods) {
         std::fprintf(stderr, "%s: method %s\n", scenario.name.c_str(), method.label.c_str());
         const BuiltScene& built = *std::find_if(scenes.begin(), scenes.end(), [&](const BuiltScene& b) {
@@ -191,7 +192,7 @@ Status runPath(const PathParams& p, const Scenario& scenario, const BenchOptions
         std::vector<double> instability, psnr, frameMs;
         struct Means {
             double select = 0, occlusion = 0, draw = 0, triangles = 0, renderRate = 0, queries = 0,
-                   waited = 0, occluded = 0;
+                   waited = 0, occluded = 0, trianglesOccluded = 0;
         } sums;
         std::uint64_t debtFrames = 0;
         runtime::Image previous;
@@ -235,6 +236,7 @@ Status runPath(const PathParams& p, const Scenario& scenario, const BenchOptions
             sums.queries += static_cast<double>(frame.stats.occlusionQueries);
             sums.waited += static_cast<double>(frame.stats.queriesWaited);
             sums.occluded += static_cast<double>(frame.stats.nodesOccluded);
+            sums.trianglesOccluded += static_cast<double>(frame.stats.trianglesOccluded);
             debtFrames += frame.stats.nodesDeferred > 0 ? 1 : 0;
             std::vector<std::string> row = {method.label};
             for (std::string& cell : runtime::telemetryCsvCells(telemetry))
@@ -282,7 +284,8 @@ Status runPath(const PathParams& p, const Scenario& scenario, const BenchOptions
                  formatNumber(sums.queries / n, 1),
                  formatNumber(sums.waited / n, 1),
                  formatNumber(sums.occluded / n, 1),
-                 formatNumber(1000.0 / std::max(mean(frameMs), 1e-9), 2)});
+                 formatNumber(1000.0 / std::max(mean(frameMs), 1e-9), 2),
+                 formatNumber(sums.trianglesOccluded / n, 0)});
     }
 
     const std::filesystem::path csv = options.outDir / (scenario.name + ".csv");

@@ -67,7 +67,8 @@ Status runRender(const RenderParams& p, const Scenario& scenario, const BenchOpt
              "occlusion_ms",
              "total_ms",
              "frames",
-             "first_total_ms"});
+             "first_total_ms",
+             "triangles_occluded"});
     for (const RenderView& view : p.views) {
         std::fprintf(stderr, "%s: view %s\n", scenario.name.c_str(), view.label.c_str());
         const std::filesystem::path stats = work / (view.label + "-stats.json");
@@ -108,7 +109,8 @@ Status runRender(const RenderParams& p, const Scenario& scenario, const BenchOpt
                  formatNumber(frame.value("occlusion_ms", 0.0)),
                  formatNumber(frame.value("total_ms", 0.0)),
                  std::to_string(frames.size()),
-                 formatNumber(first.value("total_ms", 0.0))});
+                 formatNumber(first.value("total_ms", 0.0)),
+                 std::to_string(frame.value("triangles_occluded", std::uint64_t{0}))});
         std::filesystem::remove(stats);
     }
     std::filesystem::remove(scenePath);

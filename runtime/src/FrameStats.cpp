@@ -9,6 +9,7 @@ std::string FrameStats::toJson() const {
             {"nodes_visited", nodesVisited},
             {"nodes_culled", nodesCulled},
             {"nodes_occluded", nodesOccluded},
+            {"triangles_occluded", trianglesOccluded},
             {"instances_entered", instancesEntered},
             {"cubes_drawn", cubesDrawn},
             {"cube_faces_drawn", cubeFacesDrawn},

@@ -128,6 +128,9 @@ const std::vector<Column>& columns() {
             {{"splats", "splats drawn (points)"}, [](T t) { return count(t.stats.splatsDrawn); }},
             {{"fallbacks", "cells drawn as the nearest kept kind to a forced one"},
              [](T t) { return count(t.stats.representationFallbacks); }},
+            // Added by issue 15 later, once format 2's records carried subtree counts.
+            {{"triangles_occluded", "triangles below the nodes a test found hidden (format 2)"},
+             [](T t) { return count(t.stats.trianglesOccluded); }},
     };
     return table;
 }

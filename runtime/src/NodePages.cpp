@@ -284,7 +284,8 @@ Fetch NodePages::readTop(
         storage::NodeRef ref,
         const storage::NodeBox& box,
         float priority,
-        storage::NodeRecord& out) {
+        storage::NodeRecord& out,
+        float* subtreeTriangles) {
     if (ref == storage::kNullNodeRef) {
         reportFailure(Status(ErrorCode::Corrupt, "page 0: a hierarchy without a root node"));
         return Fetch::Missing;
@@ -293,7 +294,7 @@ Fetch NodePages::readTop(
     if (fetch(ref.page, storage::PageType::Nodes, priority, payload) != Fetch::Ready)
         return Fetch::Missing;
     Result<storage::NodeRecord> node =
-            mV2 ? decodeV2(payload, ref, box, 0) : mScene.decodeNode(payload, ref);
+            mV2 ? decodeV2(payload, ref, box, 0, subtreeTriangles) : mScene.decodeNode(payload, ref);
     if (!node) {
         reportFailure(node.status());
         return Fetch::Missing;
@@ -302,23 +303,25 @@ Fetch NodePages::readTop(
     return Fetch::Ready;
 }
 
-Fetch NodePages::root(float priority, storage::NodeRef& ref, storage::NodeRecord& out) {
+Fetch NodePages::root(
+        float priority, storage::NodeRef& ref, storage::NodeRecord& out, float* subtreeTriangles) {
     ref = mRoot;
     const storage::FileHeader& h = mScene.header();
-    return readTop(ref, {h.boundsMin, h.boundsMax}, priority, out);
+    return readTop(ref, {h.boundsMin, h.boundsMax}, priority, out, subtreeTriangles);
 }
 
 Fetch NodePages::prototypeRoot(
         std::uint32_t prototype, float priority, storage::NodeRef& ref, storage::NodeRecord& out) {
     const storage::PrototypeRecord& p = mPrototypes[prototype];
     ref = p.root;
-    return readTop(ref, {p.boundsMin, p.boundsMax}, priority, out);
+    return readTop(ref, {p.boundsMin, p.boundsMax}, priority, out, nullptr);
 }
 
 Result<storage::NodeRecord> NodePages::child(
         const storage::NodeRecord& parent,
         std::span<const std::byte> childPage,
-        std::uint32_t index) const {
+        std::uint32_t index,
+        float* subtreeTriangles) const {
     const storage::NodeRef ref = storage::SceneIndex::childRef(parent, index);
     if (!mV2)
         return mScene.decodeNode(childPage, ref);
@@ -326,16 +329,20 @@ Result<storage::NodeRecord> NodePages::child(
             childPage,
             ref,
             {parent.boundsMin, parent.boundsMax},
-            static_cast<std::uint8_t>(std::min(parent.level + 1, 255)));
+            static_cast<std::uint8_t>(std::min(parent.level + 1, 255)),
+            subtreeTriangles);
 }
 
 Result<storage::NodeRecord> NodePages::decodeV2(
         std::span<const std::byte> payload,
         storage::NodeRef ref,
         const storage::NodeBox& parent,
-        std::uint8_t level) const {
+        std::uint8_t level,
+        float* subtreeTriangles) const {
     FF_ASSIGN_OR_RETURN(
             const storage::NodeV2 node, storage::readNodeV2(payload, ref.page, ref.slot, parent));
+    if (subtreeTriangles)
+        *subtreeTriangles = node.subtreeTriangles; // finite and not negative: readNodeV2
     storage::NodeRecord r{};
     r.cellMin = r.boundsMin = node.bounds.min;
     r.cellMax = r.boundsMax = node.bounds.max;

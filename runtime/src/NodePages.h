@@ -207,19 +207,26 @@ public:
           storage::PageType type,
           float priority,
           std::span<const std::byte>& payload);
-    /** The scene's root (the instance level). */
-    Fetch root(float priority, storage::NodeRef& ref, storage::NodeRecord& out);
+    /** The scene's root (the instance level). `subtreeTriangles`, where given, gets what its
+     *  subtree draws at full detail (format 2's records carry it; format 1: left as it is). */
+    Fetch root(
+            float priority,
+            storage::NodeRef& ref,
+            storage::NodeRecord& out,
+            float* subtreeTriangles = nullptr);
     /** The root of prototype `prototype`'s hierarchy. */
     Fetch prototypeRoot(
             std::uint32_t prototype, float priority, storage::NodeRef& ref, storage::NodeRecord& out);
     /** The child page of a node that has children (Ready: `payload` holds it). */
     Fetch
     childPage(const storage::NodeRecord& node, float priority, std::span<const std::byte>& payload);
-    /** Child `index` of `parent`, read from its childPage(). Errors: Corrupt (not reported). */
+    /** Child `index` of `parent`, read from its childPage(). Errors: Corrupt (not reported).
+     *  `subtreeTriangles` as for root(). */
     [[nodiscard]] Result<storage::NodeRecord> child(
             const storage::NodeRecord& parent,
             std::span<const std::byte> childPage,
-            std::uint32_t index) const;
+            std::uint32_t index,
+            float* subtreeTriangles = nullptr) const;
     /** Fills `out` with the node's own payload runs if every page is Ready and admitted by
      *  `uploads` (every page is asked for before answering, so all are in flight together). */
     Fetch collectGeometry(
@@ -256,12 +263,18 @@ public:
 
 private:
     /** Reads the node at `ref` of a hierarchy's top (bounds relative to `box` in format 2). */
-    Fetch readTop(storage::NodeRef ref, const storage::NodeBox& box, float priority, storage::NodeRecord& out);
+    Fetch readTop(
+            storage::NodeRef ref,
+            const storage::NodeBox& box,
+            float priority,
+            storage::NodeRecord& out,
+            float* subtreeTriangles = nullptr);
     [[nodiscard]] Result<storage::NodeRecord> decodeV2(
             std::span<const std::byte> payload,
             storage::NodeRef ref,
             const storage::NodeBox& parent,
-            std::uint8_t level) const;
+            std::uint8_t level,
+            float* subtreeTriangles) const;
     /** A format 2 cell's representations into mRepresentations (its own page fetched). */
     Fetch readRepresentations(const storage::NodeRecord& node, float priority);
     /** The runs of its own clusters, or of a stand-in's. */

@@ -138,6 +138,9 @@ struct OcclusionTraversal::Impl {
         std::uint32_t parent; ///< the slot of the node that queued it (kNone: the root)
         std::uint32_t depth;
         bool worthTesting = false; ///< worthTesting(), decided when it was queued
+        /** What its subtree draws at full detail (format 2's records; negative: format 1's,
+         *  which do not say), counted in triangles_occluded when a test hides it. */
+        float subtreeTriangles = -1.0f;
         /** Its slot, for a node held back from its test (queueForTest) and queued again. */
         std::uint32_t heldSlot = kNone;
     };
@@ -234,6 +237,7 @@ struct OcclusionTraversal::Impl {
     void pushChild(
             const storage::NodeRecord& record,
             storage::NodeRef ref,
+            float subtreeTriangles,
             std::uint32_t transform,
             std::uint32_t parent,
             std::uint32_t depth);
@@ -309,6 +313,7 @@ struct OcclusionTraversal::Impl {
     struct ChildRecord {
         storage::NodeRecord record;
         storage::NodeRef ref;
+        float subtreeTriangles;
     };
     std::vector<ChildRecord> children; ///< expandCell's stack of decoded children
     bool cubesSeen = false;            ///< pass 1 met a node drawn as its cube: pass 2 has work
@@ -409,13 +414,14 @@ Status OcclusionTraversal::Impl::traverse(
     addTransform(glm::mat4(1.0f), 0, nullptr);
     storage::NodeRef rootRef{};
     storage::NodeRecord root{};
-    if (nodePages.root(detail::kTopPriority, rootRef, root) != Fetch::Ready) {
+    float rootTriangles = -1.0f;
+    if (nodePages.root(detail::kTopPriority, rootRef, root, &rootTriangles) != Fetch::Ready) {
         failures = nodePages.newFailures();
         if (!failures.empty())
             return failures.front().withContext("the root node is unreadable");
         return Status::ok(); // not resident yet: nothing to draw this frame
     }
-    pushChild(root, rootRef, 0, kNone, 0);
+    pushChild(root, rootRef, rootTriangles, 0, kNone, 0);
     IOcclusionTester& tester = *services->occlusion;
     while (!queue.empty() || !waiting.empty() || !pending.empty() || !held.empty()) {
         // Answers that have arrived; when there is nothing else to do, wait for the oldest.
@@ -529,6 +535,7 @@ void OcclusionTraversal::Impl::flush() {
 void OcclusionTraversal::Impl::pushChild(
         const storage::NodeRecord& record,
         storage::NodeRef ref,
+        float subtreeTriangles,
         std::uint32_t transform,
         std::uint32_t parent,
         std::uint32_t depth) {
@@ -552,6 +559,7 @@ void OcclusionTraversal::Impl::pushChild(
             toVec3(record.boundsMin), toVec3(record.boundsMax), t.localEye);
     queue.push_back({record, ref, distance, projected, transform, parent, depth});
     queue.back().worthTesting = worthTesting(queue.back());
+    queue.back().subtreeTriangles = subtreeTriangles;
     if (!queue.back().worthTesting)
         ++untestedMet; // drawn whole when it leaves the queue
     std::push_heap(queue.begin(), queue.end(), farther);
@@ -864,6 +872,8 @@ void OcclusionTraversal::Impl::answer(const Query& query, bool visible) {
             h.hiddenTests = static_cast<std::uint16_t>(
                     std::min<int>(h.hiddenTests + 1, std::numeric_limits<std::uint16_t>::max()));
             ++stats->nodesOccluded;
+            if (node.entry.subtreeTriangles >= 0.0f)
+                stats->trianglesOccluded += static_cast<std::uint64_t>(std::llround(node.entry.subtreeTriangles));
             h.occludedFrame = frameNumber;
         }
     }
@@ -974,21 +984,22 @@ OcclusionTraversal::Impl::Expanded OcclusionTraversal::Impl::expandCell(
     const std::size_t base = children.size();
     for (std::uint32_t c = 0; c < node.childCount; ++c) {
         const storage::NodeRef childRef = storage::SceneIndex::childRef(node, c);
-        Result<storage::NodeRecord> record = nodePages.child(node, childPage, c);
+        float subtreeTriangles = -1.0f;
+        Result<storage::NodeRecord> record = nodePages.child(node, childPage, c, &subtreeTriangles);
         if (!record) {
             nodePages.reportFailure(record.status());
             children.resize(base);
             sawCube(node, transform);
             return Expanded::Deferred;
         }
-        children.push_back({*record, childRef});
+        children.push_back({*record, childRef, subtreeTriangles});
     }
     const bool drew = !runs.empty();
     if (drew)
         drawRuns(transform);
     for (std::size_t i = base; i < base + node.childCount; ++i) {
         const ChildRecord next = children[i]; // the vector may grow below
-        child(next.record, next.ref);
+        child(next.record, next.ref, next.subtreeTriangles);
     }
     children.resize(base);
     return drew ? Expanded::DrewGeometry : Expanded::NothingOwn;
@@ -1004,7 +1015,7 @@ void OcclusionTraversal::Impl::refine(const Entry& entry, std::uint32_t slot, fl
         storage::NodeRecord root{};
         const std::uint64_t untestedBefore = untestedMet;
         if (enterInstance(node, entry.transform, priority, transform, rootRef, root))
-            pushChild(root, rootRef, transform, slot, entry.depth + 1);
+            pushChild(root, rootRef, -1.0f, transform, slot, entry.depth + 1); // never tested
         else
             markVisible(slot);
         if (!answered && untestedMet != untestedBefore)
@@ -1016,8 +1027,8 @@ void OcclusionTraversal::Impl::refine(const Entry& entry, std::uint32_t slot, fl
             node,
             entry.transform,
             priority,
-            [&](const storage::NodeRecord& child, storage::NodeRef ref) {
-                pushChild(child, ref, entry.transform, slot, entry.depth + 1);
+            [&](const storage::NodeRecord& child, storage::NodeRef ref, float subtreeTriangles) {
+                pushChild(child, ref, subtreeTriangles, entry.transform, slot, entry.depth + 1);
             });
     if (expanded != Expanded::NothingOwn)
         markVisible(slot); // its geometry, or its cube, is drawn
@@ -1055,7 +1066,7 @@ void OcclusionTraversal::Impl::drawSubtree(
         return;
     }
     (void)expandCell(
-            node, transform, priority, [&](const storage::NodeRecord& child, storage::NodeRef) {
+            node, transform, priority, [&](const storage::NodeRecord& child, storage::NodeRef, float) {
                 drawSubtree(child, transform, depth + 1);
             });
 }

@@ -106,13 +106,17 @@ void addStatueBehind(builder::SceneBuilder& scene, float half, int n) {
 }
 
 /** A 10 x 10 wall at z = 0 and, behind it (z = -4), a statue 2 units wide. */
-fs::path buildWallAndStatue(const fs::path& dir) {
-    return buildScene(dir / "wall.ffs", [](builder::SceneBuilder& scene) {
-        auto wall = scene.addPrototype("wall");
-        EXPECT_TRUE(scene.addTriangles(*wall, boxSurface({-5, -5, -0.1f}, {5, 5, 0.1f}, 1)).isOk());
-        EXPECT_TRUE(scene.addInstance(*wall, glm::dmat4(1.0)).isOk());
-        addStatueBehind(scene, 1.0f, kStatueSubdivision);
-    });
+fs::path buildWallAndStatue(const fs::path& dir, builder::BuildOptions options = {}) {
+    return buildScene(
+            dir / "wall.ffs",
+            [](builder::SceneBuilder& scene) {
+                auto wall = scene.addPrototype("wall");
+                EXPECT_TRUE(
+                        scene.addTriangles(*wall, boxSurface({-5, -5, -0.1f}, {5, 5, 0.1f}, 1)).isOk());
+                EXPECT_TRUE(scene.addInstance(*wall, glm::dmat4(1.0)).isOk());
+                addStatueBehind(scene, 1.0f, kStatueSubdivision);
+            },
+            options);
 }
 
 /** The wall as 10 x 10 tiles (instances of one 1 x 1 slab), and behind it a statue 4 wide
@@ -260,6 +264,26 @@ TEST_P(BothBackends, AFrameWithoutHistoryTestsWhatIsBehindOnlyOnceWhatIsInFrontI
     EXPECT_EQ(culled->stats.trianglesDrawn, kLayer);
     EXPECT_GE(culled->stats.nodesOccluded, 1u);
     EXPECT_LE(differingPixels(culled->image, reference->image), allowedPixels(culled->image));
+}
+
+TEST_P(BothBackends, WhatATestHidIsCountedInTriangles) {
+    // Format 2's records carry their subtree's triangle count: the statue's are counted as
+    // occluded, and nothing else (format 1's records carry none, and count 0).
+    builder::BuildOptions options;
+    options.formatVersion = storage::kFormatVersion2;
+    open(buildWallAndStatue(freshDir(), options));
+    const Camera front = Camera::lookAt({0, 0, 12}, {0, 0, 0}, {0, 1, 0}, 0.8f);
+    for (int f = 0; f < 2; ++f) {
+        SCOPED_TRACE("frame " + std::to_string(f));
+        auto culled = mCulling->render(frame(front, 1.0f, true));
+        ASSERT_TRUE(culled.isOk()) << culled.status().toString();
+        EXPECT_EQ(culled->stats.trianglesDrawn, kWallTriangles);
+        EXPECT_GE(culled->stats.nodesOccluded, 1u);
+        EXPECT_EQ(culled->stats.trianglesOccluded, kStatueTriangles);
+    }
+    auto plain = mPlain->render(frame(front, 1.0f, false));
+    ASSERT_TRUE(plain.isOk()) << plain.status().toString();
+    EXPECT_EQ(plain->stats.trianglesOccluded, 0u);
 }
 
 TEST_P(BothBackends, OpaqueCubesOcclude) {

@@ -69,7 +69,9 @@ const std::vector<std::string> kPinnedColumns = {
         "stand_ins",
         "splat_sets",
         "splats",
-        "fallbacks"};
+        "fallbacks",
+        // Added by issue 15, once format 2's records carried subtree counts.
+        "triangles_occluded"};
 
 TEST(FrameTelemetryTest, ColumnsAreThePinnedOnesInOrder) {
     EXPECT_EQ(telemetryColumnNames(), kPinnedColumns);

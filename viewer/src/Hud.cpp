@@ -88,11 +88,12 @@ std::string formatHud(const HudInfo& info) {
         std::snprintf(
                 line,
                 sizeof(line),
-                "occlusion %.1f ms  queries %llu (waited %llu)  occluded %llu  render rate %.2f %%\n",
+                "occlusion %.1f ms  queries %llu (waited %llu)  occluded %llu (%s triangles)  render rate %.2f %%\n",
                 info.occlusionMs,
                 static_cast<unsigned long long>(info.occlusionQueries),
                 static_cast<unsigned long long>(info.queriesWaited),
                 static_cast<unsigned long long>(info.nodesOccluded),
+                withThousands(info.trianglesOccluded).c_str(),
                 info.renderRatePercent);
         text += line;
     }

@@ -326,6 +326,7 @@ int runView(const ViewArgs& args) {
             hudInfo.occlusionQueries = stats->occlusionQueries;
             hudInfo.queriesWaited = stats->queriesWaited;
             hudInfo.nodesOccluded = stats->nodesOccluded;
+            hudInfo.trianglesOccluded = stats->trianglesOccluded;
             hudInfo.renderRatePercent = streaming.lastFrame().renderRatePercent;
             const runtime::FrameTelemetry& telemetry = streaming.lastFrame();
             hudInfo.residentBytes = streaming.streams() ? telemetry.residentBytes : telemetry.gpuResidentBytes;

@@ -66,6 +66,7 @@ struct HudInfo {
     std::uint64_t occlusionQueries = 0;
     std::uint64_t queriesWaited = 0;
     std::uint64_t nodesOccluded = 0;
+    std::uint64_t trianglesOccluded = 0; ///< below them (format 2; 0 for format 1)
     double renderRatePercent = 0.0; ///< triangles drawn, % of the scene's
     std::uint64_t residentBytes = 0;    ///< GPU page arena now (later: the cache's resident bytes)
     std::uint64_t budgetBytes = 0;      ///< the budget `-`/`=` change

@@ -11,6 +11,9 @@ struct FrameStats {
     std::uint64_t nodesVisited = 0;  ///< node records read by selection
     std::uint64_t nodesCulled = 0;   ///< outside the frustum
     std::uint64_t nodesOccluded = 0; ///< skipped because an occlusion test found them hidden
+    /** The triangles below the nodes a test found hidden, at full detail (what their subtrees
+     *  hold, instances counted): format 2's records carry the count; format 1's do not, 0. */
+    std::uint64_t trianglesOccluded = 0;
     std::uint64_t instancesEntered = 0; ///< instance nodes refined into their prototype
     std::uint64_t cubesDrawn = 0;
     std::uint64_t cubeFacesDrawn = 0; ///< front-facing faces of drawn cubes
