@@ -202,10 +202,14 @@ std::optional<StandIn> simplifySource(const StandInSource& from, const storage::
         return std::nullopt;
 
     // The border locked: its ring of triangles stays whole, and the rest is simplified towards
-    // a share of the source (what the children draw). No error limit: the stand-in records
-    // what it reached, and the runtime draws it only where that error is below ε pixels.
+    // a share of the source (what the children draw), or towards the most a stand-in may keep
+    // where the ring is too large for that (a tree's leaves are all ring: aiming past the
+    // limit, the forest kept no simplified copy, its cells kept splats and were drawn 3.7 dB
+    // below brute force). No error limit: the stand-in records what it reached, and the
+    // runtime draws it only where that error is below ε pixels.
     const auto target = static_cast<std::size_t>(static_cast<double>(source.size()) * kStandInTargetShare);
     const std::size_t ring = borderTriangleCount(indices);
+    const auto maxKept = static_cast<std::size_t>(static_cast<double>(source.size()) * kMaxStandInShare);
     float relativeError = 0.0f;
     std::vector<unsigned> kept(indices.size());
     kept.resize(meshopt_simplify(
@@ -215,7 +219,7 @@ std::optional<StandIn> simplifySource(const StandInSource& from, const storage::
             vertices[0].position.data(),
             unique,
             sizeof(storage::PackedVertex),
-            std::min((target + ring) * 3, indices.size()),
+            std::min(std::min(target + ring, maxKept) * 3, indices.size()),
             1.0f,
             meshopt_SimplifyLockBorder,
             &relativeError));

@@ -104,8 +104,8 @@ inline constexpr double kStandInTargetShare = 0.22;
 
 /**
  * Simplifies `source` (welded on `grid`'s coordinates, so as the cluster encoder sees it) with
- * its border locked to its ring and kStandInTargetShare of its triangles. nullopt when it keeps
- * more than kMaxStandInShare of them. Its surface error is `source`'s plus the
+ * its border locked to its ring and kStandInTargetShare of its triangles, at most
+ * kMaxStandInShare of them. nullopt when it keeps more than kMaxStandInShare. Its surface error is `source`'s plus the
  * simplification's, its shading error the larger of `source`'s and the simplification's.
  */
 [[nodiscard]] std::optional<StandIn> simplifySource(const StandInSource& source, const storage::PositionGrid& grid);

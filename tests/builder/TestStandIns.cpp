@@ -102,6 +102,40 @@ TEST(StandInTest, AStandInAimsAtAShareOfItsSourceOnTopOfItsRing) {
     EXPECT_EQ(borderCorners(standIn->triangles, grid), borderCorners(source, grid));
 }
 
+TEST(StandInTest, AStandInWhoseRingIsLargeAimsAtTheMostItMayKeep) {
+    // The wavy sheet beside 1,521 loose quads (a tree's leaves: every edge open, so all in the
+    // ring, which the lock keeps): its ring on top of the share is over the 0.6 a stand-in may
+    // keep, so it aims at 0.6 instead — and reaches it on the sheet's interior, where aiming at
+    // ring plus share would have come back over 0.6 and kept no stand-in at all.
+    const storage::PositionGrid grid = gridFor();
+    std::vector<storage::PackedTriangle> source =
+            sheet([](int, int) { return std::array<std::uint8_t, 4>{90, 120, 60, 255}; });
+    for (storage::PackedTriangle& t : source)
+        for (storage::PackedVertex& v : t.vertices)
+            v.position[1] = 0.5f * std::sin(0.7f * v.position[0]) * std::cos(0.9f * v.position[2]);
+    constexpr int kLeavesPerSide = 39;
+    const std::array<std::uint8_t, 4> green{40, 140, 40, 255};
+    for (int i = 0; i < kLeavesPerSide; ++i)
+        for (int j = 0; j < kLeavesPerSide; ++j) {
+            const float x = 0.2f + 1.2f * static_cast<float>(i);
+            const float z = 0.2f + 1.2f * static_cast<float>(j);
+            const auto corner = [&](float dx, float dz) {
+                storage::PackedVertex v = vertexAt(0, 0, 0.9f, green);
+                v.position = {x + dx, 0.9f, z + dz};
+                return v;
+            };
+            source.push_back({{corner(0, 0), corner(0, 0.4f), corner(0.4f, 0.4f)}});
+            source.push_back({{corner(0, 0), corner(0.4f, 0.4f), corner(0.4f, 0)}});
+        }
+    const double whole = static_cast<double>(source.size());
+    const double ring = 4.0 * kCells - 2.0 + 2.0 * kLeavesPerSide * kLeavesPerSide;
+    ASSERT_GT(ring + kStandInTargetShare * whole, kMaxStandInShare * whole) << "the case this is about";
+    const std::optional<StandIn> standIn = simplifySource({source, 0.0f, true, 0.0f}, grid);
+    ASSERT_TRUE(standIn.has_value());
+    EXPECT_LE(static_cast<double>(standIn->triangles.size()), kMaxStandInShare * whole);
+    EXPECT_GE(static_cast<double>(standIn->triangles.size()), ring);
+}
+
 TEST(StandInTest, AColourEdgeAcrossAFlatSheetCountsAsError) {
     // Flat, so meshoptimizer's error is 0; the colour steps from green to white at x = 24.5.
     const storage::PositionGrid grid = gridFor();
