@@ -268,7 +268,7 @@ TEST_P(BothBackends, AFrameWithoutHistoryTestsWhatIsBehindOnlyOnceWhatIsInFrontI
 
 TEST_P(BothBackends, WhatATestHidIsCountedInTriangles) {
     // Format 2's records carry their subtree's triangle count: the statue's are counted as
-    // occluded, and nothing else (format 1's records carry none, and count 0).
+    // occluded, and nothing else. (Format 1's records carry none: nothing is counted there.)
     builder::BuildOptions options;
     options.formatVersion = storage::kFormatVersion2;
     open(buildWallAndStatue(freshDir(), options));
