@@ -42,6 +42,17 @@ std::vector<storage::PackedTriangle> sheet(Color colorAt) {
     return out;
 }
 
+/** The sheet of one colour, its height a wave, so simplification stops at its target rather
+ *  than at its ring. */
+std::vector<storage::PackedTriangle> wavySheet() {
+    std::vector<storage::PackedTriangle> out =
+            sheet([](int, int) { return std::array<std::uint8_t, 4>{90, 120, 60, 255}; });
+    for (storage::PackedTriangle& t : out)
+        for (storage::PackedVertex& v : t.vertices)
+            v.position[1] = 0.5f * std::sin(0.7f * v.position[0]) * std::cos(0.9f * v.position[2]);
+    return out;
+}
+
 storage::PositionGrid gridFor() {
     return storage::PositionGrid::covering({0, -1, 0}, {kCells, 1, kCells}, 16).value();
 }
@@ -89,11 +100,7 @@ TEST(StandInTest, AStandInAimsAtAShareOfItsSourceOnTopOfItsRing) {
     // its triangles, plus the ring of triangles along the locked border (one a border cell,
     // two at two of the corners), which the lock keeps.
     const storage::PositionGrid grid = gridFor();
-    std::vector<storage::PackedTriangle> source =
-            sheet([](int, int) { return std::array<std::uint8_t, 4>{90, 120, 60, 255}; });
-    for (storage::PackedTriangle& t : source)
-        for (storage::PackedVertex& v : t.vertices)
-            v.position[1] = 0.5f * std::sin(0.7f * v.position[0]) * std::cos(0.9f * v.position[2]);
+    std::vector<storage::PackedTriangle> source = wavySheet();
     const std::optional<StandIn> standIn = simplifySource({source, 0.0f, true, 0.0f}, grid);
     ASSERT_TRUE(standIn.has_value());
     const double whole = static_cast<double>(source.size());
@@ -108,11 +115,7 @@ TEST(StandInTest, AStandInWhoseRingIsLargeAimsAtTheMostItMayKeep) {
     // keep, so it aims at 0.6 instead — and reaches it on the sheet's interior, where aiming at
     // ring plus share would have come back over 0.6 and kept no stand-in at all.
     const storage::PositionGrid grid = gridFor();
-    std::vector<storage::PackedTriangle> source =
-            sheet([](int, int) { return std::array<std::uint8_t, 4>{90, 120, 60, 255}; });
-    for (storage::PackedTriangle& t : source)
-        for (storage::PackedVertex& v : t.vertices)
-            v.position[1] = 0.5f * std::sin(0.7f * v.position[0]) * std::cos(0.9f * v.position[2]);
+    std::vector<storage::PackedTriangle> source = wavySheet();
     constexpr int kLeavesPerSide = 39;
     const std::array<std::uint8_t, 4> green{40, 140, 40, 255};
     for (int i = 0; i < kLeavesPerSide; ++i)
