@@ -734,6 +734,8 @@ void OcclusionTraversal::Impl::queueForTest(Tested node) {
     for (const glm::vec3& corner : box.corners) {
         node.worldMin = glm::min(node.worldMin, corner);
         node.worldMax = glm::max(node.worldMax, corner);
+        if (!withoutHistory)
+            continue; // behindUnanswered() reads the rest only on such a frame
         const glm::vec4 clip = viewProjection * glm::vec4(corner, 1.0f);
         const glm::vec2 ndc = glm::vec2(clip) / clip.w; // in front of the eye: testable()
         node.screenMin = glm::min(node.screenMin, ndc);
@@ -753,16 +755,15 @@ bool OcclusionTraversal::Impl::behindUnanswered(const Tested& node) const {
     const auto inFront = [&](const Tested& other) {
         if (!(other.entry.distance < node.entry.distance))
             return false;
-        const bool overlapOnScreen = glm::all(glm::lessThanEqual(other.screenMin, node.screenMax)) &&
-                                     glm::all(glm::lessThanEqual(node.screenMin, other.screenMax));
-        if (!overlapOnScreen)
-            return false;
-        const bool overlapInSpace = glm::all(glm::lessThanEqual(other.worldMin, node.worldMax)) &&
-                                    glm::all(glm::lessThanEqual(node.worldMin, other.worldMax));
+        if (glm::all(glm::lessThanEqual(other.worldMin, node.worldMax)) &&
+            glm::all(glm::lessThanEqual(node.worldMin, other.worldMax)))
+            return true; // the boxes overlap
         // Wholly in front of it on screen, a nearer box may hide it too: on a frame without
         // history, until kHeldBehindWaits.
-        return overlapInSpace ||
-               (withoutHistory && waits < kHeldBehindWaits && other.depthMax <= node.depthMin);
+        if (!withoutHistory || waits >= kHeldBehindWaits || other.depthMax > node.depthMin)
+            return false;
+        return glm::all(glm::lessThanEqual(other.screenMin, node.screenMax)) &&
+               glm::all(glm::lessThanEqual(node.screenMin, other.screenMax));
     };
     if (std::any_of(waiting.begin(), waiting.end(), inFront))
         return true;
