@@ -170,8 +170,13 @@ void BackToFrontTraversal::visit(
         return;
     }
     // A cube costs less to draw than to ask about; what is refined is skipped if Occluded.
-    if (mServices->visibility.visibility({frame.instancePath, ref}) == Visibility::Occluded) {
+    const IVisibility::Known known = mServices->visibility.known({frame.instancePath, ref});
+    if (known.visibility == Visibility::Occluded) {
         ++mStats->nodesOccluded;
+        return;
+    }
+    if (known.walked && mPass == Pass::CubesOnly && mCubesOnly) {
+        drawMetCubes(node, known.cubes, active);
         return;
     }
     const float priority = std::min(projected, kTopPriority) * options.priorityScale;
@@ -248,17 +253,46 @@ void BackToFrontTraversal::visit(
         }
         const glm::vec3 d =
                 0.5f * (toVec3(child->cellMin) + toVec3(child->cellMax)) - frame.localEye;
-        mChildStack.push_back({*child, childRef, frame.metric.worldLengthSquared(d)});
+        mChildStack.push_back({*child, childRef, frame.metric.worldLengthSquared(d), c});
     }
+    // Ties go by the sibling index, reversed, so this order is exactly the reverse of
+    // OcclusionTraversal's nearest-first walk of a subtree (whose cubes it may take as met).
     std::sort(
             mChildStack.begin() + static_cast<std::ptrdiff_t>(base),
             mChildStack.end(),
-            [](const ChildEntry& a, const ChildEntry& b) { return a.distance > b.distance; });
+            [](const ChildEntry& a, const ChildEntry& b) {
+                return a.distance != b.distance ? a.distance > b.distance : a.index > b.index;
+            });
     for (std::size_t i = base; i < base + node.childCount; ++i) {
         const ChildEntry child = mChildStack[i]; // the stack may grow below
         visit(child.record, child.ref, active, depth + 1);
     }
     mChildStack.resize(base);
+}
+
+void BackToFrontTraversal::drawMetCubes(
+        const storage::NodeRecord& node, std::span<const MetCube> cubes, std::size_t active) {
+    // A cube in the frame of the instance the node places (`draw.transform` 1) needs that
+    // frame in the batch, as entering the instance would have added it.
+    std::size_t inner = active;
+    for (const MetCube& met : cubes) {
+        if (met.draw.transform == 1 && inner == active) {
+            const storage::InstanceRecord& instance = mScene.instances()[node.geometryPage];
+            const glm::mat4 matrix = mActive[active].matrix * detail::instanceTransform(instance);
+            pushActive(matrix, childInstancePath(mActive[active].instancePath, node.geometryPage));
+            inner = mActive.size() - 1;
+        }
+        ++mStats->cubesDrawn;
+        if (mStats->cubeFacesPerLevel.size() <= met.level)
+            mStats->cubeFacesPerLevel.resize(met.level + 1u, 0);
+        mStats->cubeFacesPerLevel[met.level] += met.facesToward;
+        mStats->cubeFacesDrawn += met.facesToward;
+        mList.cubes.push_back(met.draw);
+        mList.cubes.back().transform = mActive[met.draw.transform == 1 ? inner : active].listIndex;
+        flushIfFull();
+    }
+    if (inner != active)
+        mActive.pop_back();
 }
 
 void BackToFrontTraversal::emitGeometry(const detail::PayloadRun& run, std::size_t active) {

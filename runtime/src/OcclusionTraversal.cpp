@@ -75,6 +75,11 @@ struct History {
     std::uint32_t occludedFrame = 0; ///< frame whose test found it hidden (pass 2 skips it)
     std::uint16_t hiddenTests = 0;   ///< tests in a row that found it hidden
     bool hidden = false;             ///< its last test found it hidden
+    /** Frame that walked its subtree whole and met the cubes [walkedFirst, + walkedCount) of
+     *  that frame's record (pass 2 draws them without walking there again). */
+    std::uint32_t walkedFrame = 0;
+    std::uint32_t walkedFirst = 0;
+    std::uint32_t walkedCount = 0;
 };
 
 class HistoryVisibility final : public IVisibility {
@@ -93,23 +98,33 @@ private:
 };
 
 /** What pass 2 skips: the nodes this frame's tests found hidden, and those pass 1 walked whole
- *  without meeting a cube (pass 2 draws cubes only: nothing there for it). */
+ *  without meeting a cube (pass 2 draws cubes only: nothing there for it); and what it takes
+ *  as met: the cubes below a subtree pass 1 walked whole. */
 class FrameOccluded final : public IVisibility {
 public:
-    explicit FrameOccluded(const std::unordered_map<NodeKey, History, NodeKeyHash>& history)
-        : mHistory(history) {}
+    FrameOccluded(
+            const std::unordered_map<NodeKey, History, NodeKeyHash>& history,
+            const std::vector<MetCube>& met)
+        : mHistory(history), mMet(met) {}
     [[nodiscard]] Visibility visibility(const NodeKey& key) const override {
+        return known(key).visibility;
+    }
+    [[nodiscard]] Known known(const NodeKey& key) const override {
         const auto it = mHistory.find(key);
         if (it == mHistory.end() || it->second.lastSeen != mFrame)
-            return Visibility::Unknown; // pass 1 did not reach it (a cube, or below a drawn node)
+            return {}; // pass 1 did not reach it (a cube, or below a drawn node)
         const History& h = it->second;
-        return h.occludedFrame == mFrame || h.cubesFrame != mFrame ? Visibility::Occluded
-                                                                   : Visibility::Unknown;
+        if (h.occludedFrame == mFrame || h.cubesFrame != mFrame)
+            return {Visibility::Occluded, false, {}};
+        if (h.walkedFrame != mFrame)
+            return {};
+        return {Visibility::Unknown, true, std::span(mMet).subspan(h.walkedFirst, h.walkedCount)};
     }
     void startFrame(std::uint32_t frame) { mFrame = frame; }
 
 private:
     const std::unordered_map<NodeKey, History, NodeKeyHash>& mHistory;
+    const std::vector<MetCube>& mMet;
     std::uint32_t mFrame = 0;
 };
 
@@ -150,6 +165,9 @@ struct OcclusionTraversal::Impl {
         std::uint32_t parent;
         bool visible;
         bool cubesBelow = false; ///< pass 2 has a cube to draw in its subtree
+        bool walked = false;     ///< walked whole: its cubes are metCubes[walkedFirst, + count)
+        std::uint32_t walkedFirst = 0;
+        std::uint32_t walkedCount = 0;
     };
     /** A node waiting for (or in) a test. */
     struct Tested {
@@ -180,7 +198,7 @@ struct OcclusionTraversal::Impl {
         , nodePages(sceneFile, pages)
         , cubes(sceneFile, pages)
         , historyView(history)
-        , occluded(history) {
+        , occluded(history, metCubes) {
         cubes.setCubesOnly(true);
     }
 
@@ -203,7 +221,8 @@ struct OcclusionTraversal::Impl {
             const storage::NodeRecord& node,
             std::uint32_t transform,
             float priority,
-            Child&& child);
+            Child&& child,
+            bool nearestFirst = false);
     bool enterInstance(
             const storage::NodeRecord& node,
             std::uint32_t parentTransform,
@@ -211,7 +230,10 @@ struct OcclusionTraversal::Impl {
             std::uint32_t& transform,
             storage::NodeRef& rootRef,
             storage::NodeRecord& root);
-    /** Draws a subtree too small to test, depth first, without tests or history. */
+    /** Draws a subtree too small to test, without tests or history, and records the cubes it
+     *  meets for pass 2 (MetCube). */
+    void walkWhole(const Entry& entry, std::uint32_t slot);
+    /** walkWhole's walk: depth first, nearest child first. */
     void drawSubtree(const storage::NodeRecord& node, std::uint32_t transform, std::uint32_t depth);
     /** Whether enough lies below the node to pay for a test (OcclusionOptions::minTestTriangles).
      */
@@ -248,8 +270,11 @@ struct OcclusionTraversal::Impl {
     std::uint32_t listIndex(std::uint32_t transform);
     void markVisible(std::uint32_t slot);
     /** A cube (or a deferred node's) for pass 2 below currentSlot: pulled up like visibility.
-     *  Drawn here too, as an occluder, where it can occlude (OcclusionOptions::cubesOcclude). */
-    void sawCube(const storage::NodeRecord& node, std::uint32_t transform);
+     *  Drawn here too, as an occluder, where it can occlude (OcclusionOptions::cubesOcclude).
+     *  `deferred`: the node's pages are not ready (pass 2 draws its cube if it has one). */
+    void sawCube(const storage::NodeRecord& node, std::uint32_t transform, bool deferred = false);
+    /** walkWhole's record of a cube pass 2 would draw. */
+    void recordMet(const storage::NodeRecord& node, std::uint32_t transform, bool deferred);
     void flush();
     /** Pass 1's slots into the history (before pass 2, which reads what had cubes below). */
     void rememberSlots();
@@ -314,7 +339,20 @@ struct OcclusionTraversal::Impl {
         storage::NodeRecord record;
         storage::NodeRef ref;
         float subtreeTriangles;
+        float distance; ///< of its cell's centre, squared (the back-to-front walk's order)
+        std::uint32_t index;
     };
+    /** The subtree walkWhole is walking: pass 2 may take its cubes as met only if they lie in
+     *  the frame of its root or of the one instance its root places. */
+    struct WholeWalk {
+        bool recording = false;
+        bool complete = true;
+        std::uint32_t outer = kNone; ///< the root's transform
+        std::uint32_t inner = kNone; ///< the transform of the instance the root places
+        std::uint32_t rootDepth = 0;
+    } wholeWalk;
+    /** The cubes walkWhole met this frame, each subtree's back to front (FrameOccluded). */
+    std::vector<MetCube> metCubes;
     std::vector<ChildRecord> children; ///< expandCell's stack of decoded children
     bool cubesSeen = false;            ///< pass 1 met a node drawn as its cube: pass 2 has work
     Status sinkStatus;                 ///< the first error the renderer reported this frame
@@ -408,6 +446,7 @@ Status OcclusionTraversal::Impl::traverse(
     pending.clear();
     late.clear();
     lateWaiting.clear();
+    metCubes.clear();
     ++batchNumber;
 
     // Pass 1: opaque geometry, front to back, with occlusion tests.
@@ -565,7 +604,28 @@ void OcclusionTraversal::Impl::pushChild(
     std::push_heap(queue.begin(), queue.end(), farther);
 }
 
-void OcclusionTraversal::Impl::sawCube(const storage::NodeRecord& node, std::uint32_t transform) {
+void OcclusionTraversal::Impl::recordMet(
+        const storage::NodeRecord& node, std::uint32_t transform, bool deferred) {
+    if (transform != wholeWalk.outer && transform != wholeWalk.inner) {
+        wholeWalk.complete = false;
+        return;
+    }
+    // As the back-to-front walk counts and draws it: a deferred node counted, its cube drawn if
+    // it has one.
+    if (deferred)
+        ++stats->nodesDeferred;
+    if (deferred && !(node.flags & storage::kNodeHasCube))
+        return;
+    metCubes.push_back(
+            {{toVec3(node.cellMin), toVec3(node.cellMax), transform == wholeWalk.outer ? 0u : 1u, node.cube},
+             static_cast<std::uint32_t>(detail::cubeFacesToward(node, transforms[transform].localEye, 1)),
+             node.level});
+}
+
+void OcclusionTraversal::Impl::sawCube(
+        const storage::NodeRecord& node, std::uint32_t transform, bool deferred) {
+    if (wholeWalk.recording && wholeWalk.complete)
+        recordMet(node, transform, deferred);
     cubesSeen = true;
     for (std::uint32_t slot = currentSlot; slot != kNone && !slots[slot].cubesBelow;
          slot = slots[slot].parent)
@@ -613,7 +673,7 @@ void OcclusionTraversal::Impl::process(const Entry& entry) {
     if (!entry.worthTesting) {
         // Too little below it to pay for a test: drawn whole, without tests or history.
         markVisible(slot);
-        drawSubtree(node, entry.transform, entry.depth);
+        walkWhole(entry, slot);
         return;
     }
     // A prototype's root has its instance's box: the instance node was the test.
@@ -918,7 +978,7 @@ bool OcclusionTraversal::Impl::enterInstance(
     const storage::InstanceRecord& instance = scene.instances()[instanceIndex];
     const storage::PrototypeRecord& prototype = nodePages.prototypes()[instance.prototype];
     if (nodePages.prototypeRoot(instance.prototype, priority, rootRef, root) != Fetch::Ready) {
-        sawCube(node, parentTransform); // drawn as its cube (pass 2)
+        sawCube(node, parentTransform, true); // drawn as its cube (pass 2)
         return false;
     }
     ++stats->instancesEntered;
@@ -944,7 +1004,11 @@ void OcclusionTraversal::Impl::drawRuns(std::uint32_t transform) {
 
 template <typename Child>
 OcclusionTraversal::Impl::Expanded OcclusionTraversal::Impl::expandCell(
-        const storage::NodeRecord& node, std::uint32_t transform, float priority, Child&& child) {
+        const storage::NodeRecord& node,
+        std::uint32_t transform,
+        float priority,
+        Child&& child,
+        bool nearestFirst) {
     // A stand-in accurate enough here is drawn instead of the whole subtree (as back to front).
     const Transform& t = transforms[transform];
     const float projected = detail::projectedPixels(node, t.localEye, t.metric, frame->camera, pixelScale);
@@ -972,7 +1036,7 @@ OcclusionTraversal::Impl::Expanded OcclusionTraversal::Impl::expandCell(
     const bool childrenReady = standIn || node.childCount == 0 ||
                                nodePages.childPage(node, priority, childPage) == Fetch::Ready;
     if (!childrenReady || !geometryReady) {
-        sawCube(node, transform); // its cube stands in for the subtree (pass 2)
+        sawCube(node, transform, true); // its cube stands in for the subtree (pass 2)
         return Expanded::Deferred;
     }
     if (standIn) {
@@ -990,11 +1054,20 @@ OcclusionTraversal::Impl::Expanded OcclusionTraversal::Impl::expandCell(
         if (!record) {
             nodePages.reportFailure(record.status());
             children.resize(base);
-            sawCube(node, transform);
+            sawCube(node, transform, true);
             return Expanded::Deferred;
         }
-        children.push_back({*record, childRef, subtreeTriangles});
+        const glm::vec3 centre = 0.5f * (toVec3(record->cellMin) + toVec3(record->cellMax));
+        children.push_back(
+                {*record, childRef, subtreeTriangles, t.metric.worldLengthSquared(centre - t.localEye), c});
     }
+    if (nearestFirst)
+        std::sort(
+                children.begin() + static_cast<std::ptrdiff_t>(base),
+                children.end(),
+                [](const ChildRecord& a, const ChildRecord& b) {
+                    return a.distance != b.distance ? a.distance < b.distance : a.index < b.index;
+                });
     const bool drew = !runs.empty();
     if (drew)
         drawRuns(transform);
@@ -1062,14 +1135,41 @@ void OcclusionTraversal::Impl::drawSubtree(
         std::uint32_t inner = 0;
         storage::NodeRef rootRef{};
         storage::NodeRecord root{};
-        if (enterInstance(node, transform, priority, inner, rootRef, root))
+        if (enterInstance(node, transform, priority, inner, rootRef, root)) {
+            if (depth == wholeWalk.rootDepth && transform == wholeWalk.outer)
+                wholeWalk.inner = inner;
+            else
+                wholeWalk.complete = false; // a frame pass 2 would enter on its own walk
             drawSubtree(root, inner, depth + 1);
+        }
         return;
     }
+    // Nearest first: the reverse of the back-to-front walk's order, so the cubes met, reversed,
+    // are in its order.
     (void)expandCell(
-            node, transform, priority, [&](const storage::NodeRecord& child, storage::NodeRef, float) {
+            node,
+            transform,
+            priority,
+            [&](const storage::NodeRecord& child, storage::NodeRef, float) {
                 drawSubtree(child, transform, depth + 1);
-            });
+            },
+            true);
+}
+
+void OcclusionTraversal::Impl::walkWhole(const Entry& entry, std::uint32_t slot) {
+    const auto first = static_cast<std::uint32_t>(metCubes.size());
+    // An observer is told of each cube with its node, which only pass 2's own walk has.
+    wholeWalk = {frame->selection.observer == nullptr, true, entry.transform, kNone, entry.depth};
+    drawSubtree(entry.record, entry.transform, entry.depth);
+    if (wholeWalk.recording && wholeWalk.complete) {
+        std::reverse(metCubes.begin() + first, metCubes.end());
+        slots[slot].walked = true;
+        slots[slot].walkedFirst = first;
+        slots[slot].walkedCount = static_cast<std::uint32_t>(metCubes.size()) - first;
+    } else {
+        metCubes.resize(first);
+    }
+    wholeWalk.recording = false;
 }
 
 const storage::PrototypeRecord* OcclusionTraversal::Impl::prototypeBelow(const Entry& entry) const {
@@ -1147,6 +1247,11 @@ void OcclusionTraversal::Impl::rememberSlots() {
         h.lastSeen = frameNumber;
         if (slot.cubesBelow)
             h.cubesFrame = frameNumber;
+        if (slot.walked) {
+            h.walkedFrame = frameNumber;
+            h.walkedFirst = slot.walkedFirst;
+            h.walkedCount = slot.walkedCount;
+        }
         if (slot.visible) {
             h.lastVisible = frameNumber;
             h.hidden = false;

@@ -519,6 +519,35 @@ INSTANTIATE_TEST_SUITE_P(
 // frame again until it is complete: the passes without their pages find nodes visible that are
 // not, and with coherence those would be drawn untested for frames after (the city's walk drew
 // 14 x format 1's triangles in its first 30 frames). Only the complete pass's answers may stay.
+// Pass 1 walks what is too small to test whole and hands the cubes it met there to pass 2,
+// which draws them without walking there again (BackToFrontTraversal's met cubes): with every
+// answer taken as visible, the same cubes as the frustum-culled frame's, counted alike and
+// blended in the same order. From 2.2 radii the trees' inner cells are walked whole, from 5
+// whole trees (their cubes met in the instance's frame).
+TEST_F(OcclusionCullingTest, CubesMetInSubtreesWalkedWholeBlendAsWithoutOcclusion) {
+    open(buildGenerated(freshDir(), "forest:trees=64"));
+    for (const float distance : {2.2f, 5.0f}) {
+        SCOPED_TRACE("distance " + std::to_string(distance));
+        const Camera camera = Camera::orbit(mBounds, distance, 30.0f, 20.0f, 0.8f);
+        FrameContext orderOnly = frame(camera, 1.0f, true);
+        orderOnly.occlusion.ignoreAnswers = true;
+        auto unculled = mOrderOnly->render(orderOnly);
+        ASSERT_TRUE(unculled.isOk()) << unculled.status().toString();
+        auto reference = mPlain->render(frame(camera, 1.0f, false));
+        ASSERT_TRUE(reference.isOk()) << reference.status().toString();
+        EXPECT_GT(reference->stats.cubesDrawn, 1000u);
+        EXPECT_EQ(unculled->stats.cubesDrawn, reference->stats.cubesDrawn);
+        EXPECT_EQ(unculled->stats.cubeFacesDrawn, reference->stats.cubeFacesDrawn);
+        EXPECT_EQ(unculled->stats.cubeFacesPerLevel, reference->stats.cubeFacesPerLevel);
+        EXPECT_EQ(unculled->stats.trianglesDrawn, reference->stats.trianglesDrawn);
+        // Only the geometry's order differs (front to back): the forest's crossed leaves tie in
+        // depth (NothingVisibleIsCulled's bound); cubes blended out of order differ far more.
+        EXPECT_LE(
+                static_cast<double>(differingPixels(unculled->image, reference->image)),
+                2e-3 * unculled->image.width * unculled->image.height);
+    }
+}
+
 TEST_F(OcclusionCullingTest, ACompleteFrameRemembersOnlyItsLastPass) {
     builder::BuildOptions options;
     options.formatVersion = storage::kFormatVersion2;

@@ -17,6 +17,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <array>
 #include <cstring>
 #include <filesystem>
 #include <map>
@@ -65,7 +66,7 @@ private:
     MappedPageAccess mMapped;
 };
 
-/** Occludes the keys it is given. */
+/** Occludes the keys it is given, and says an earlier walk met `walked`'s cubes below theirs. */
 class FakeVisibility final : public IVisibility {
 public:
     Visibility visibility(const NodeKey& key) const override {
@@ -74,7 +75,14 @@ public:
                 return Visibility::Occluded;
         return Visibility::Visible;
     }
+    Known known(const NodeKey& key) const override {
+        for (const auto& [k, cubes] : walked)
+            if (k == key)
+                return {visibility(key), true, cubes};
+        return {visibility(key), false, {}};
+    }
     std::vector<NodeKey> occluded;
+    std::vector<std::pair<NodeKey, std::vector<MetCube>>> walked;
 };
 
 class RefuseAll final : public IUploadGate {
@@ -395,6 +403,68 @@ TEST(SyntheticCutTest, RecursiveInstancingDrawsEveryLeafInBackToFrontOrder) {
         EXPECT_EQ(many.sink.cubes[i].transform, one.sink.cubes[i].transform) << i;
         EXPECT_EQ(many.sink.cubes[i].cube.boxMin, one.sink.cubes[i].cube.boxMin) << i;
     }
+}
+
+// OcclusionTraversal walks the subtrees too small to test whole in its first pass and hands the
+// cubes it met there to the cubes-only walk, which draws them instead of walking there again:
+// where the subtree's own cubes would come, in the frame each was met in.
+TEST(SyntheticCutTest, ACubesOnlyWalkDrawsTheCubesAnEarlierWalkMetInsteadOfWalkingThere) {
+    const auto scene = writeRecursiveScene(freshDir() / "recursive.ffs", 1);
+    ASSERT_TRUE(scene);
+    MappedPageAccess pages(*scene);
+    const FrameContext frame = wholeCut();
+    const auto cubesOnly = [&](IVisibility& visibility) {
+        BackToFrontTraversal traversal(*scene, pages);
+        traversal.setCubesOnly(true);
+        AdmitAll admitAll;
+        Walk w{test::RecordingSink(true), {}, Status::ok()};
+        w.status = traversal.traverse(frame, {w.sink, visibility, admitAll}, w.stats);
+        return w;
+    };
+    NoVisibility none;
+    const Walk plain = cubesOnly(none);
+    ASSERT_TRUE(plain.status.isOk()) << plain.status.toString();
+    ASSERT_EQ(plain.sink.cubes.size(), 64u);
+    // The root, its 8 instance nodes, and each instance's root and 8 leaves.
+    EXPECT_EQ(plain.stats.nodesVisited, 1u + 8u + 8u * 9u);
+
+    // The instance in octant 5, node slot 6 of the root's page; its 8 cubes in the plain walk.
+    constexpr int kOctant = 5;
+    const glm::vec3 at(0.5f, 0.0f, 0.5f); // octant 5: x and z high
+    const auto inInstance = [&](const test::RecordedCube& c) {
+        return glm::vec3(c.transform[3]) == at && c.transform[0][0] == 0.5f;
+    };
+    const auto first = std::find_if(plain.sink.cubes.begin(), plain.sink.cubes.end(), inInstance);
+    ASSERT_NE(first, plain.sink.cubes.end());
+    const auto begin = static_cast<std::size_t>(first - plain.sink.cubes.begin());
+    ASSERT_TRUE(std::all_of(first, first + 8, inInstance)) << "an instance's cubes come together";
+
+    FakeVisibility visibility;
+    const std::array<std::uint8_t, 4> red{255, 0, 0, 255};
+    std::vector<MetCube> met{
+            {{{0.0f, 0.0f, 0.0f}, {0.1f, 0.1f, 0.1f}, 1, {red, red, red, red, red, red}}, 3, 1},
+            {{{0.2f, 0.2f, 0.2f}, {0.3f, 0.3f, 0.3f}, 0, {red, red, red, red, red, red}}, 2, 1}};
+    visibility.walked.push_back({{0, {scene->header().root.page, 1 + kOctant}}, met});
+    const Walk taken = cubesOnly(visibility);
+    ASSERT_TRUE(taken.status.isOk()) << taken.status.toString();
+    EXPECT_EQ(taken.stats.nodesVisited, plain.stats.nodesVisited - 9u) << "not walked below it";
+    ASSERT_EQ(taken.sink.cubes.size(), 64u - 8u + 2u);
+    EXPECT_EQ(taken.stats.cubesDrawn, taken.sink.cubes.size());
+    for (std::size_t i = 0; i < begin; ++i)
+        EXPECT_EQ(taken.sink.cubes[i].cube.boxMin, plain.sink.cubes[i].cube.boxMin) << i;
+    // Frame 1: the instance's, as its own cubes had; frame 0: the frame the node lies in.
+    EXPECT_EQ(taken.sink.cubes[begin].cube.boxMin, met[0].draw.boxMin);
+    EXPECT_EQ(taken.sink.cubes[begin].transform, first->transform);
+    EXPECT_EQ(taken.sink.cubes[begin + 1].cube.boxMin, met[1].draw.boxMin);
+    EXPECT_EQ(taken.sink.cubes[begin + 1].transform, glm::mat4(1.0f));
+    for (std::size_t i = begin + 8; i < plain.sink.cubes.size(); ++i)
+        EXPECT_EQ(taken.sink.cubes[i - 6].cube.boxMin, plain.sink.cubes[i].cube.boxMin) << i;
+    // Its faces counted as it says, at its level.
+    std::uint64_t perLevel = 0;
+    for (std::uint64_t faces : taken.stats.cubeFacesPerLevel)
+        perLevel += faces;
+    EXPECT_EQ(perLevel, taken.stats.cubeFacesDrawn);
+    EXPECT_GE(taken.stats.cubeFacesDrawn, 5u);
 }
 
 // The bound: a frame's transient memory stays under 64 MiB whatever the cut. Seven

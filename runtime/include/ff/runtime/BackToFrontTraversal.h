@@ -70,6 +70,7 @@ private:
         storage::NodeRecord record;
         storage::NodeRef ref;
         float distance;
+        std::uint32_t index; ///< among its siblings: ties in distance go by it
     };
     /** What the pass in progress emits (see the class comment). */
     enum class Pass { Everything, GeometryOnly, CubesOnly };
@@ -80,6 +81,9 @@ private:
     void emitGeometry(const detail::PayloadRun& run, std::size_t active);
     void emitCube(const storage::NodeRecord& node, storage::NodeRef ref, std::size_t active);
     void defer(const storage::NodeRecord& node, storage::NodeRef ref, std::size_t active);
+    /** Draws the cubes an earlier walk met below `node` (IVisibility::Known) instead of walking
+     *  there again. */
+    void drawMetCubes(const storage::NodeRecord& node, std::span<const MetCube> cubes, std::size_t active);
     void pushActive(const glm::mat4& transform, std::uint64_t instancePath);
     void addToList(ActiveTransform& active);
     /** Hands a full batch to the sink and starts the next one. */

@@ -62,12 +62,33 @@ constexpr std::uint64_t childInstancePath(std::uint64_t parent, std::uint32_t in
     return (parent ^ (std::uint64_t{instance} + 1)) * 0x9E3779B97F4A7C15ull + 0x632BE59BD9B4E019ull;
 }
 
+/** A cube an earlier walk of the frame met below a node it walked whole (see IVisibility::Known),
+ *  as a cubes-only walk would draw it. */
+struct MetCube {
+    /** Its transform: 0 the node's own frame, 1 the frame of the instance the node places. */
+    CubeDraw draw;
+    std::uint32_t facesToward; ///< its faces toward the eye (cube_faces_drawn)
+    std::uint32_t level;       ///< its level (cube_faces_per_level)
+};
+
 /** What is known of nodes' visibility (this frame's occlusion tests, or the last frame's). */
 class IVisibility {
 public:
     virtual ~IVisibility() = default;
     /** The answer for `key` (Unknown: never tested). Unknown and Visible are drawn. */
     [[nodiscard]] virtual Visibility visibility(const NodeKey& key) const = 0;
+
+    struct Known {
+        Visibility visibility = Visibility::Unknown;
+        /** An earlier walk of this frame went through the node's whole subtree and met these
+         *  cubes, in back-to-front order: a cubes-only walk draws them instead of walking it. */
+        bool walked = false;
+        std::span<const MetCube> cubes;
+    };
+    /** The answer for `key` and, where there is one, the earlier walk's (one lookup). */
+    [[nodiscard]] virtual Known known(const NodeKey& key) const {
+        return {visibility(key), false, {}};
+    }
 };
 
 /** Knows nothing: every node is Unknown (drawn). */
