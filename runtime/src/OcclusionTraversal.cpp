@@ -105,7 +105,8 @@ public:
     FrameOccluded(
             const std::unordered_map<NodeKey, History, NodeKeyHash>& history,
             const std::vector<MetCube>& met)
-        : mHistory(history), mMet(met) {}
+        : mHistory(history)
+        , mMet(met) {}
     [[nodiscard]] Visibility visibility(const NodeKey& key) const override {
         return known(key).visibility;
     }
@@ -353,6 +354,7 @@ struct OcclusionTraversal::Impl {
     } wholeWalk;
     /** The cubes walkWhole met this frame, each subtree's back to front (FrameOccluded). */
     std::vector<MetCube> metCubes;
+    std::size_t metCubesLimit = 0; ///< FrameBudgets::drawBatchBytes' worth
     std::vector<ChildRecord> children; ///< expandCell's stack of decoded children
     bool cubesSeen = false;            ///< pass 1 met a node drawn as its cube: pass 2 has work
     Status sinkStatus;                 ///< the first error the renderer reported this frame
@@ -447,6 +449,8 @@ Status OcclusionTraversal::Impl::traverse(
     late.clear();
     lateWaiting.clear();
     metCubes.clear();
+    metCubesLimit = frame->budgets.drawBatchBytes / sizeof(MetCube);
+    metCubes.reserve(metCubesLimit);
     ++batchNumber;
 
     // Pass 1: opaque geometry, front to back, with occlusion tests.
@@ -606,7 +610,10 @@ void OcclusionTraversal::Impl::pushChild(
 
 void OcclusionTraversal::Impl::recordMet(
         const storage::NodeRecord& node, std::uint32_t transform, bool deferred) {
-    if (transform != wholeWalk.outer && transform != wholeWalk.inner) {
+    // Bounded like a draw batch (and reserved whole, so it is never copied to grow): past the
+    // bound pass 2 walks the subtree itself.
+    if (metCubes.size() >= metCubesLimit ||
+        (transform != wholeWalk.outer && transform != wholeWalk.inner)) {
         wholeWalk.complete = false;
         return;
     }
@@ -618,7 +625,7 @@ void OcclusionTraversal::Impl::recordMet(
         return;
     metCubes.push_back(
             {{toVec3(node.cellMin), toVec3(node.cellMax), transform == wholeWalk.outer ? 0u : 1u, node.cube},
-             static_cast<std::uint32_t>(detail::cubeFacesToward(node, transforms[transform].localEye, 1)),
+             static_cast<std::uint8_t>(detail::cubeFacesToward(node, transforms[transform].localEye, 1)),
              node.level});
 }
 

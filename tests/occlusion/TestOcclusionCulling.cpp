@@ -523,28 +523,37 @@ INSTANTIATE_TEST_SUITE_P(
 // which draws them without walking there again (BackToFrontTraversal's met cubes): with every
 // answer taken as visible, the same cubes as the frustum-culled frame's, counted alike and
 // blended in the same order. From 2.2 radii the trees' inner cells are walked whole, from 5
-// whole trees (their cubes met in the instance's frame).
+// whole trees (their cubes met in the instance's frame). With batches of 16 KiB the record
+// (bounded like a batch) fills after a few hundred cubes and pass 2 walks the rest itself.
 TEST_F(OcclusionCullingTest, CubesMetInSubtreesWalkedWholeBlendAsWithoutOcclusion) {
     open(buildGenerated(freshDir(), "forest:trees=64"));
-    for (const float distance : {2.2f, 5.0f}) {
-        SCOPED_TRACE("distance " + std::to_string(distance));
-        const Camera camera = Camera::orbit(mBounds, distance, 30.0f, 20.0f, 0.8f);
-        FrameContext orderOnly = frame(camera, 1.0f, true);
-        orderOnly.occlusion.ignoreAnswers = true;
-        auto unculled = mOrderOnly->render(orderOnly);
-        ASSERT_TRUE(unculled.isOk()) << unculled.status().toString();
-        auto reference = mPlain->render(frame(camera, 1.0f, false));
-        ASSERT_TRUE(reference.isOk()) << reference.status().toString();
-        EXPECT_GT(reference->stats.cubesDrawn, 1000u);
-        EXPECT_EQ(unculled->stats.cubesDrawn, reference->stats.cubesDrawn);
-        EXPECT_EQ(unculled->stats.cubeFacesDrawn, reference->stats.cubeFacesDrawn);
-        EXPECT_EQ(unculled->stats.cubeFacesPerLevel, reference->stats.cubeFacesPerLevel);
-        EXPECT_EQ(unculled->stats.trianglesDrawn, reference->stats.trianglesDrawn);
-        // Only the geometry's order differs (front to back): the forest's crossed leaves tie in
-        // depth (NothingVisibleIsCulled's bound); cubes blended out of order differ far more.
-        EXPECT_LE(
-                static_cast<double>(differingPixels(unculled->image, reference->image)),
-                2e-3 * unculled->image.width * unculled->image.height);
+    for (const std::size_t batchBytes : {FrameBudgets{}.drawBatchBytes, std::size_t{16} << 10}) {
+        for (const float distance : {2.2f, 5.0f}) {
+            SCOPED_TRACE(
+                    "distance " + std::to_string(distance) + ", batches of " +
+                    std::to_string(batchBytes));
+            const Camera camera = Camera::orbit(mBounds, distance, 30.0f, 20.0f, 0.8f);
+            FrameContext orderOnly = frame(camera, 1.0f, true);
+            orderOnly.occlusion.ignoreAnswers = true;
+            orderOnly.budgets.drawBatchBytes = batchBytes;
+            auto unculled = mOrderOnly->render(orderOnly);
+            ASSERT_TRUE(unculled.isOk()) << unculled.status().toString();
+            FrameContext plain = frame(camera, 1.0f, false);
+            plain.budgets.drawBatchBytes = batchBytes;
+            auto reference = mPlain->render(plain);
+            ASSERT_TRUE(reference.isOk()) << reference.status().toString();
+            EXPECT_GT(reference->stats.cubesDrawn, 1000u);
+            EXPECT_EQ(unculled->stats.cubesDrawn, reference->stats.cubesDrawn);
+            EXPECT_EQ(unculled->stats.cubeFacesDrawn, reference->stats.cubeFacesDrawn);
+            EXPECT_EQ(unculled->stats.cubeFacesPerLevel, reference->stats.cubeFacesPerLevel);
+            EXPECT_EQ(unculled->stats.trianglesDrawn, reference->stats.trianglesDrawn);
+            // Only the geometry's order differs (front to back): the forest's crossed leaves
+            // tie in depth (NothingVisibleIsCulled's bound); cubes blended out of order differ
+            // far more.
+            EXPECT_LE(
+                    static_cast<double>(differingPixels(unculled->image, reference->image)),
+                    2e-3 * unculled->image.width * unculled->image.height);
+        }
     }
 }
 

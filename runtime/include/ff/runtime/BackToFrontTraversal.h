@@ -83,7 +83,8 @@ private:
     void defer(const storage::NodeRecord& node, storage::NodeRef ref, std::size_t active);
     /** Draws the cubes an earlier walk met below `node` (IVisibility::Known) instead of walking
      *  there again. */
-    void drawMetCubes(const storage::NodeRecord& node, std::span<const MetCube> cubes, std::size_t active);
+    void drawMetCubes(
+            const storage::NodeRecord& node, std::span<const MetCube> cubes, std::size_t active);
     void pushActive(const glm::mat4& transform, std::uint64_t instancePath);
     void addToList(ActiveTransform& active);
     /** Hands a full batch to the sink and starts the next one. */

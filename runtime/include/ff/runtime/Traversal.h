@@ -67,8 +67,8 @@ constexpr std::uint64_t childInstancePath(std::uint64_t parent, std::uint32_t in
 struct MetCube {
     /** Its transform: 0 the node's own frame, 1 the frame of the instance the node places. */
     CubeDraw draw;
-    std::uint32_t facesToward; ///< its faces toward the eye (cube_faces_drawn)
-    std::uint32_t level;       ///< its level (cube_faces_per_level)
+    std::uint8_t facesToward; ///< its faces toward the eye (cube_faces_drawn)
+    std::uint8_t level;       ///< its level (cube_faces_per_level)
 };
 
 /** What is known of nodes' visibility (this frame's occlusion tests, or the last frame's). */
