@@ -320,20 +320,23 @@ def bytes_read(data, methods, png):
 
 def render(data, out, name):
     """Peak RSS of each view's frame against its limit, with the frame's cut beside it; with more
-    than one frame a view, the first (cold) and last (warm) frame times beside it."""
+    than one frame a view, the first (cold) and warm frame times beside it."""
     timed = all(number(r.get("frames") or 0) > 1 for r in data)
     if timed:
         fig, (ax, axt) = plt.subplots(1, 2, figsize=(12, 4.5))
         x = range(len(data))
         cold = [number(r["first_total_ms"]) for r in data]
-        warm = [number(r["total_ms"]) for r in data]
+        # The p50 of the frames after the first where the CSV has it (older runs: the last frame).
+        median = all(r.get("warm_median_ms") for r in data)
+        warm = [number(r["warm_median_ms"] if median else r["total_ms"]) for r in data]
         axt.bar([i - 0.2 for i in x], cold, width=0.4, color="C1", label="first frame (no history)")
-        axt.bar([i + 0.2 for i in x], warm, width=0.4, color="C2", label="last frame (warm)")
+        axt.bar([i + 0.2 for i in x], warm, width=0.4, color="C2",
+                label="warm: p50 of the frames after the first" if median else "last frame (warm)")
         for i, r in enumerate(data):
             axt.annotate(f"{int(number(r['triangles_drawn'])):,} tris\n{int(number(r['occlusion_queries'])):,} queries",
                          (i + 0.2, warm[i]), ha="center", va="bottom", fontsize=7)
         axt.set_xticks(list(x))
-        axt.set_xticklabels([r["view"] for r in data])
+        axt.set_xticklabels([r["view"] for r in data], rotation=40, ha="right", fontsize=8)
         axt.set_yscale("log")
         axt.set_ylabel("frame total_ms (log)")
         axt.set_title("frame time")
@@ -344,6 +347,9 @@ def render(data, out, name):
     labels = [r["view"] for r in data]
     rss = [number(r["peak_rss_bytes"]) / 2**20 for r in data]
     ax.bar(labels, rss, color="C0", label="peak RSS of the render process")
+    ax.tick_params(axis="x", labelrotation=40, labelsize=8)
+    for label in ax.get_xticklabels():
+        label.set_horizontalalignment("right")
     limits = [number(r["rss_limit_bytes"]) / 2**20 for r in data if r["rss_limit_bytes"]]
     if limits:
         ax.axhline(max(limits), color="C3", linestyle="--", label=f"limit {max(limits):.0f} MiB")

@@ -9,6 +9,7 @@
 #include "ScenarioParts.h"
 
 #include <ff/bench/Benchmarks.h>
+#include <ff/runtime/Percentile.h>
 #include <ff/runtime/Units.h>
 
 #include <nlohmann/json.hpp>
@@ -16,6 +17,7 @@
 #include <cstdio>
 #include <sstream>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace ff::bench {
@@ -33,6 +35,15 @@ struct RenderParams {
     std::vector<RenderView> views = {{"default", {}}};
     std::string rssLimit; ///< a byte size, or empty
 };
+
+/** The p50 frame time after the first (cold) frame; the only frame's if there is one. The last
+ *  frame alone swings with the machine (and the first few after a cold one run slower). */
+double warmMedianMs(const nlohmann::json& frames) {
+    std::vector<double> times;
+    for (std::size_t i = frames.size() > 1 ? 1 : 0; i < frames.size(); ++i)
+        times.push_back(frames[i].value("total_ms", 0.0));
+    return runtime::percentile(std::move(times), 0.5);
+}
 
 Status runRender(const RenderParams& p, const Scenario& scenario, const BenchOptions& options) {
     ScenarioRun scenarioRun(scenario, options);
@@ -68,7 +79,8 @@ Status runRender(const RenderParams& p, const Scenario& scenario, const BenchOpt
              "total_ms",
              "frames",
              "first_total_ms",
-             "triangles_occluded"});
+             "triangles_occluded",
+             "warm_median_ms"});
     for (const RenderView& view : p.views) {
         std::fprintf(stderr, "%s: view %s\n", scenario.name.c_str(), view.label.c_str());
         const std::filesystem::path stats = work / (view.label + "-stats.json");
@@ -110,7 +122,8 @@ Status runRender(const RenderParams& p, const Scenario& scenario, const BenchOpt
                  formatNumber(frame.value("total_ms", 0.0)),
                  std::to_string(frames.size()),
                  formatNumber(first.value("total_ms", 0.0)),
-                 std::to_string(frame.value("triangles_occluded", std::uint64_t{0}))});
+                 std::to_string(frame.value("triangles_occluded", std::uint64_t{0})),
+                 formatNumber(warmMedianMs(frames))});
         std::filesystem::remove(stats);
     }
     std::filesystem::remove(scenePath);
@@ -120,8 +133,10 @@ Status runRender(const RenderParams& p, const Scenario& scenario, const BenchOpt
     md << "`" << options.command << "`: scene "
        << (p.scene.gltf.empty() ? "`--generate " + p.scene.generate + "`"
                                 : "`" + p.scene.gltf + "`")
-       << ", one child `farfield render` per view (its flags; the last frame's statistics) at " << p.size[0] << "x"
-       << p.size[1] << " (every page mapped); peak RSS is the child's ru_maxrss"
+       << ", one child `farfield render` per view (its flags; the last frame's statistics, "
+          "first_total_ms the first frame's, warm_median_ms the p50 of the frames after the "
+          "first) at "
+       << p.size[0] << "x" << p.size[1] << " (every page mapped); peak RSS is the child's ru_maxrss"
        << (limit ? ", against a limit of " + runtime::formatBytes(limit) : std::string()) << ".\n\n"
        << table.markdown() << "\n![peak memory of a frame](" << scenario.name << ".png)\n";
     return scenarioRun.finish("render", csv, md.str());
