@@ -152,6 +152,12 @@ struct Renderer::Impl {
     std::array<BatchBuffers, kBatchBufferSets> ring;
     std::size_t ringSlot = 0;
     BatchBuffers& current() { return ring[ringSlot]; }
+    /** The cube buffers go round on their own, one step per batch that draws cubes: stepped
+     *  with every batch, a frame that also draws a batch without cubes (occlusion culling's
+     *  geometry pass) put its large cube batch in a slot not grown yet frame after frame, and
+     *  each growth cost a frame 40-80 ms (the forest's corner view, the three frames after the
+     *  cold one). */
+    std::size_t cubeSlot = 0;
     GLuint iota = 0;
     GLsizeiptr iotaCap = 0;
     std::vector<IndirectCommand> commands;
@@ -627,7 +633,8 @@ Status Renderer::Impl::drawGeometry(const DrawList& list, const glm::mat4& viewP
 
 void Renderer::Impl::bindCubes(const DrawList& list, GLuint program, const glm::mat4& viewProjection) {
     const auto bytes = static_cast<GLsizeiptr>(list.cubes.size() * sizeof(CubeDraw));
-    BatchBuffers& set = current();
+    cubeSlot = (cubeSlot + 1) % kBatchBufferSets;
+    BatchBuffers& set = ring[cubeSlot];
     ensureCapacity(set.cubes, set.cubesCap, bytes);
     bufferSubData(set.cubes, 0, bytes, list.cubes.data());
     glUseProgram(program);
