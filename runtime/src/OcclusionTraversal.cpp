@@ -351,6 +351,7 @@ struct OcclusionTraversal::Impl {
         std::uint32_t outer = kNone; ///< the root's transform
         std::uint32_t inner = kNone; ///< the transform of the instance the root places
         std::uint32_t rootDepth = 0;
+        std::uint64_t deferred = 0; ///< deferred nodes met (counted once the record is taken)
     } wholeWalk;
     /** The cubes walkWhole met this frame, each subtree's back to front (FrameOccluded). */
     std::vector<MetCube> metCubes;
@@ -620,7 +621,7 @@ void OcclusionTraversal::Impl::recordMet(
     // As the back-to-front walk counts and draws it: a deferred node counted, its cube drawn if
     // it has one.
     if (deferred)
-        ++stats->nodesDeferred;
+        ++wholeWalk.deferred;
     if (deferred && !(node.flags & storage::kNodeHasCube))
         return;
     metCubes.push_back(
@@ -1166,9 +1167,12 @@ void OcclusionTraversal::Impl::drawSubtree(
 void OcclusionTraversal::Impl::walkWhole(const Entry& entry, std::uint32_t slot) {
     const auto first = static_cast<std::uint32_t>(metCubes.size());
     // An observer is told of each cube with its node, which only pass 2's own walk has.
-    wholeWalk = {frame->selection.observer == nullptr, true, entry.transform, kNone, entry.depth};
+    wholeWalk = {frame->selection.observer == nullptr, true, entry.transform, kNone, entry.depth, 0};
     drawSubtree(entry.record, entry.transform, entry.depth);
     if (wholeWalk.recording && wholeWalk.complete) {
+        // Pass 2 will not walk it: what it would have counted is counted here. (A record left
+        // incomplete is dropped, and pass 2 walks and counts the subtree itself.)
+        stats->nodesDeferred += wholeWalk.deferred;
         std::reverse(metCubes.begin() + first, metCubes.end());
         slots[slot].walked = true;
         slots[slot].walkedFirst = first;
