@@ -7,7 +7,7 @@ packages=(
     build-essential cmake ninja-build pkg-config
     libglm-dev libosmesa6-dev mesa-common-dev python3-glad
     libdraco-dev libtinygltf-dev nlohmann-json3-dev libstb-dev
-    libopenimageio-dev libxxhash-dev libcli11-dev libmeshoptimizer-dev
+    libopenimageio-dev libxxhash-dev libcli11-dev libmeshoptimizer-dev libabsl-dev
     libglfw3-dev xvfb xauth
     libgtest-dev
     python3-matplotlib time
