@@ -343,7 +343,7 @@ struct OcclusionTraversal::Impl {
         storage::NodeRecord record;
         storage::NodeRef ref;
         float subtreeTriangles;
-        float distance; ///< of its cell's centre, squared (the back-to-front walk's order)
+        float distance; ///< of its cell's centre, squared (set only for a nearest-first walk)
         std::uint32_t index;
     };
     /** The subtree walkWhole is walking: pass 2 may take its cubes as met only if they lie in
@@ -1068,17 +1068,21 @@ OcclusionTraversal::Impl::Expanded OcclusionTraversal::Impl::expandCell(
             sawCube(node, transform, true);
             return Expanded::Deferred;
         }
-        const glm::vec3 centre = 0.5f * (toVec3(record->cellMin) + toVec3(record->cellMax));
-        children.push_back(
-                {*record, childRef, subtreeTriangles, t.metric.worldLengthSquared(centre - t.localEye), c});
+        children.push_back({*record, childRef, subtreeTriangles, 0.0f, c});
     }
-    if (nearestFirst)
+    if (nearestFirst) {
+        for (std::size_t i = base; i < children.size(); ++i) {
+            const storage::NodeRecord& r = children[i].record;
+            const glm::vec3 centre = 0.5f * (toVec3(r.cellMin) + toVec3(r.cellMax));
+            children[i].distance = t.metric.worldLengthSquared(centre - t.localEye);
+        }
         std::sort(
                 children.begin() + static_cast<std::ptrdiff_t>(base),
                 children.end(),
                 [](const ChildRecord& a, const ChildRecord& b) {
                     return a.distance != b.distance ? a.distance < b.distance : a.index < b.index;
                 });
+    }
     const bool drew = !runs.empty();
     if (drew)
         drawRuns(transform);

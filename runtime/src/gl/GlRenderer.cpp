@@ -144,6 +144,7 @@ struct Renderer::Impl {
     std::unordered_set<std::uint64_t> admitted; ///< pages not in the arena admitted this frame
     // Per-batch buffers, a ring of them: rewriting a buffer the GPU may still be reading (the
     // batch before, when an occlusion query flushed it) would wait for that batch to finish.
+    // The cube buffer of each set goes round on its own (cubeSlot).
     struct BatchBuffers {
         GLuint transforms = 0, normalMatrices = 0, localEyes = 0, indirect = 0, cubes = 0, pointDraws = 0;
         GLsizeiptr transformsCap = 0, normalsCap = 0, eyesCap = 0, indirectCap = 0, cubesCap = 0, pointDrawsCap = 0;
