@@ -322,20 +322,22 @@ bool SceneIndex::nodeRefInFile(NodeRef ref) const noexcept {
 std::string SceneIndex::geometryRunProblem(const NodeRecord& node) const {
     if (node.geometryCount == 0)
         return {};
-    const std::string run = "geometry run of " + std::to_string(node.geometryCount) +
-                            " triangles from page " + std::to_string(node.geometryPage) + " slot " +
-                            std::to_string(node.geometryFirst);
+    // Built only on the error path: decodeNode() asks for every node of every frame.
+    const auto run = [&node] {
+        return "geometry run of " + std::to_string(node.geometryCount) + " triangles from page " +
+               std::to_string(node.geometryPage) + " slot " + std::to_string(node.geometryFirst);
+    };
     if (node.geometryPage == 0 || node.geometryPage >= pageCount())
-        return run + ": page outside the file (" + std::to_string(pageCount()) + " pages)";
+        return run() + ": page outside the file (" + std::to_string(pageCount()) + " pages)";
     if (node.geometryFirst >= mTrianglesPerPage)
-        return run + ": slot out of range (a Geometry page holds " +
+        return run() + ": slot out of range (a Geometry page holds " +
                std::to_string(mTrianglesPerPage) + ")";
     // geometryFirst < trianglesPerPage and counts are 32-bit: no overflow in 64 bits.
     const std::uint64_t lastPage =
             node.geometryPage +
             (std::uint64_t{node.geometryFirst} + node.geometryCount - 1) / mTrianglesPerPage;
     if (lastPage >= pageCount())
-        return run + ": ends on page " + std::to_string(lastPage) + ", past the end of the file (" +
+        return run() + ": ends on page " + std::to_string(lastPage) + ", past the end of the file (" +
                std::to_string(pageCount()) + " pages)";
     return {};
 }
