@@ -266,6 +266,27 @@ TEST_P(BothBackends, AFrameWithoutHistoryTestsWhatIsBehindOnlyOnceWhatIsInFrontI
     EXPECT_LE(differingPixels(culled->image, reference->image), allowedPixels(culled->image));
 }
 
+TEST_P(BothBackends, AFrameWithoutHistoryStopsTestingWhereNothingDrawnToDepthIsHidden) {
+    // 4,096 trees from five radii at ε = 1: every tree is far enough to be drawn as cubes
+    // (points), which write no depth, over a ground that hides none of them. Without history
+    // each group of trees is worth a test (1,353 of them with every one tested); once the
+    // frame's answers keep finding everything visible while nothing new is drawn to depth,
+    // the groups left are drawn untested (OcclusionTraversal.cpp, kPriorHiddenShare).
+    open(buildGenerated(freshDir(), "forest:trees=4096"));
+    const Camera camera = Camera::orbit(mBounds, 5.0f, 30.0f, 20.0f, 0.8f);
+    auto reference = mPlain->render(frame(camera, 1.0f, false));
+    ASSERT_TRUE(reference.isOk()) << reference.status().toString();
+    auto culled = mCulling->render(frame(camera, 1.0f, true));
+    ASSERT_TRUE(culled.isOk()) << culled.status().toString();
+    ASSERT_EQ(culled->stats.nodesOccluded, 0u);
+    ASSERT_LE(culled->stats.trianglesDrawn, 64u); // the ground, nothing to occlude with
+    EXPECT_EQ(culled->stats.instancesEntered, 4096u);
+    EXPECT_GE(culled->stats.occlusionQueries, 1u);
+    EXPECT_LE(culled->stats.occlusionQueries * 8, culled->stats.instancesEntered);
+    EXPECT_EQ(culled->stats.cubesDrawn, reference->stats.cubesDrawn);
+    EXPECT_LE(differingPixels(culled->image, reference->image), allowedPixels(culled->image));
+}
+
 TEST_P(BothBackends, WhatATestHidIsCountedInTriangles) {
     // Format 2's records carry their subtree's triangle count: the statue's are counted as
     // occluded, and nothing else. (Format 1's records carry none: nothing is counted there.)
