@@ -171,7 +171,7 @@ struct OcclusionTraversal::Impl {
         /** testSaves() reaches OcclusionOptions::minTestTriangles: enough lies below the node
          *  to pay for a test (decided when it was queued). */
         bool worthTesting = false;
-        float testSaves = 0.0f;
+        float testSaves = 0.0f; ///< testSaves(), when it was queued
         /** What its subtree draws at full detail (format 2's records; negative: format 1's,
          *  which do not say), counted in triangles_occluded when a test hides it. */
         float subtreeTriangles = -1.0f;

@@ -269,7 +269,7 @@ TEST_P(BothBackends, AFrameWithoutHistoryTestsWhatIsBehindOnlyOnceWhatIsInFrontI
 TEST_P(BothBackends, AFrameWithoutHistoryStopsTestingWhereNothingDrawnToDepthIsHidden) {
     // 4,096 trees from five radii at ε = 1: every tree is far enough to be drawn as cubes
     // (points), which write no depth, over a ground that hides none of them. Without history
-    // each group of trees is worth a test (1,353 of them with every one tested); once the
+    // each group of trees is worth a test (1,346 tests before this rule); once the
     // frame's answers keep finding everything visible while nothing new is drawn to depth,
     // the groups left are drawn untested (OcclusionTraversal.cpp, kPriorHiddenShare).
     open(buildGenerated(freshDir(), "forest:trees=4096"));
