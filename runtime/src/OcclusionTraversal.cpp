@@ -168,9 +168,6 @@ struct OcclusionTraversal::Impl {
         std::uint32_t transform;
         std::uint32_t parent; ///< the slot of the node that queued it (kNone: the root)
         std::uint32_t depth;
-        /** testSaves() reaches OcclusionOptions::minTestTriangles: enough lies below the node
-         *  to pay for a test (decided when it was queued). */
-        bool worthTesting = false;
         float testSaves = 0.0f; ///< testSaves(), when it was queued
         /** What its subtree draws at full detail (format 2's records; negative: format 1's,
          *  which do not say), counted in triangles_occluded when a test hides it. */
@@ -259,6 +256,14 @@ struct OcclusionTraversal::Impl {
     void drawSubtree(const storage::NodeRecord& node, std::uint32_t transform, std::uint32_t depth);
     /** The triangles a test of the node may save: what its subtree draws, estimated. */
     double testSaves(const Entry& entry) const;
+    /** The most a subtree seen this small draws where it is cut at ε, as a surface: (size / ε)²
+     *  cells of `perNode` triangles each (unbounded at ε = 0). */
+    double cutTriangles(const Entry& entry, double perNode) const;
+    /** Whether a test that may save this many triangles pays for itself
+     *  (OcclusionOptions::minTestTriangles). */
+    bool paysForTest(double saves) const {
+        return saves >= static_cast<double>(frame->occlusion.minTestTriangles);
+    }
     /** How likely a test is to find a node hidden, against kPriorHiddenShare (1: as likely,
      *  less: less likely); what a test may save is weighed by it. */
     double hiddenLikelihood() const;
@@ -646,9 +651,8 @@ void OcclusionTraversal::Impl::pushChild(
             toVec3(record.boundsMin), toVec3(record.boundsMax), t.localEye);
     queue.push_back({record, ref, distance, projected, transform, parent, depth});
     queue.back().testSaves = static_cast<float>(testSaves(queue.back()));
-    queue.back().worthTesting = queue.back().testSaves >= static_cast<float>(frame->occlusion.minTestTriangles);
     queue.back().subtreeTriangles = subtreeTriangles;
-    if (!queue.back().worthTesting)
+    if (!paysForTest(queue.back().testSaves))
         ++untestedMet; // drawn whole when it leaves the queue
     std::push_heap(queue.begin(), queue.end(), farther);
 }
@@ -728,15 +732,9 @@ void OcclusionTraversal::Impl::process(const Entry& entry) {
     // too, (size / ε)² cells of the densest prototype's triangles per node: without that bound
     // they would be worth a test however unlikely it is to pay (the forest's tree groups).
     double saves = entry.testSaves;
-    if (const double likelihood = hiddenLikelihood(); likelihood < 1.0 && entry.worthTesting) {
-        const double epsilon = frame->selection.epsilonPixels;
-        if (epsilon > 0.0) {
-            const double cells = static_cast<double>(entry.projected) / epsilon;
-            saves = std::min(saves, cells * cells * mostTrianglesPerNode);
-        }
-        saves *= likelihood;
-    }
-    if (saves < static_cast<double>(frame->occlusion.minTestTriangles)) {
+    if (const double likelihood = hiddenLikelihood(); likelihood < 1.0 && paysForTest(saves))
+        saves = std::min(saves, cutTriangles(entry, mostTrianglesPerNode)) * likelihood;
+    if (!paysForTest(saves)) {
         // Too little below it to pay for a test: drawn whole, without tests or history.
         markVisible(slot);
         walkWhole(entry, slot);
@@ -1294,13 +1292,17 @@ double OcclusionTraversal::Impl::testSaves(const Entry& entry) const {
     // Seen small, a subtree is cut at ε: at most (size / ε)² cells of it are drawn, each a cube
     // or a leaf's few triangles (its prototype's triangles per node). Not at the instance level,
     // whose cells may stack instances deep (the atoms of a molecule; but see process()).
-    const storage::PrototypeRecord* prototype = prototypeBelow(entry);
-    const double epsilon = frame->selection.epsilonPixels;
-    if (prototype && epsilon > 0.0) {
-        const double cells = static_cast<double>(entry.projected) / epsilon;
-        below = std::min(below, cells * cells * trianglesPerNode(*prototype));
-    }
+    if (const storage::PrototypeRecord* prototype = prototypeBelow(entry))
+        below = std::min(below, cutTriangles(entry, trianglesPerNode(*prototype)));
     return below;
+}
+
+double OcclusionTraversal::Impl::cutTriangles(const Entry& entry, double perNode) const {
+    const double epsilon = frame->selection.epsilonPixels;
+    if (epsilon <= 0.0)
+        return std::numeric_limits<double>::infinity(); // every leaf is drawn
+    const double cells = static_cast<double>(entry.projected) / epsilon;
+    return cells * cells * perNode;
 }
 
 double OcclusionTraversal::Impl::hiddenLikelihood() const {
