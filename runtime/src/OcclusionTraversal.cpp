@@ -90,9 +90,11 @@ struct History {
     std::uint32_t occludedFrame = 0; ///< frame whose test found it hidden (pass 2 skips it)
     std::uint16_t hiddenTests = 0;   ///< tests in a row that found it hidden
     bool hidden = false;             ///< its last test found it hidden
-    /** Frame that walked its subtree whole and met the cubes [walkedFirst, + walkedCount) of
-     *  that frame's record (pass 2 draws them without walking there again). */
+    /** Frame that walked its subtree whole (pass 2 asks nothing below it) and, if it kept them
+     *  (walkedRecorded), met the cubes [walkedFirst, + walkedCount) of that frame's record
+     *  (pass 2 draws them without walking there again). */
     std::uint32_t walkedFrame = 0;
+    bool walkedRecorded = false;
     std::uint32_t walkedFirst = 0;
     std::uint32_t walkedCount = 0;
 };
@@ -131,10 +133,12 @@ public:
             return {}; // pass 1 did not reach it (a cube, or below a drawn node)
         const History& h = it->second;
         if (h.occludedFrame == mFrame || h.cubesFrame != mFrame)
-            return {Visibility::Occluded, false, {}};
+            return {Visibility::Occluded, false, false, {}};
         if (h.walkedFrame != mFrame)
             return {};
-        return {Visibility::Unknown, true, std::span(mMet).subspan(h.walkedFirst, h.walkedCount)};
+        if (!h.walkedRecorded)
+            return {Visibility::Unknown, true, false, {}};
+        return {Visibility::Unknown, true, true, std::span(mMet).subspan(h.walkedFirst, h.walkedCount)};
     }
     void startFrame(std::uint32_t frame) { mFrame = frame; }
 
@@ -181,7 +185,8 @@ struct OcclusionTraversal::Impl {
         std::uint32_t parent;
         bool visible;
         bool cubesBelow = false; ///< pass 2 has a cube to draw in its subtree
-        bool walked = false;     ///< walked whole: its cubes are metCubes[walkedFirst, + count)
+        bool walked = false;     ///< walked whole
+        bool recorded = false;   ///< and its cubes are metCubes[walkedFirst, + count)
         std::uint32_t walkedFirst = 0;
         std::uint32_t walkedCount = 0;
     };
@@ -1243,12 +1248,14 @@ void OcclusionTraversal::Impl::walkWhole(const Entry& entry, std::uint32_t slot)
         // incomplete is dropped, and pass 2 walks and counts the subtree itself.)
         stats->nodesDeferred += wholeWalk.deferred;
         std::reverse(metCubes.begin() + first, metCubes.end());
-        slots[slot].walked = true;
+        slots[slot].recorded = true;
         slots[slot].walkedFirst = first;
         slots[slot].walkedCount = static_cast<std::uint32_t>(metCubes.size()) - first;
     } else {
         metCubes.resize(first);
     }
+    // Nothing below it has a slot: pass 2 walks there, if it does, without asking.
+    slots[slot].walked = true;
     wholeWalk.recording = false;
 }
 
@@ -1337,6 +1344,7 @@ void OcclusionTraversal::Impl::rememberSlots() {
             h.cubesFrame = frameNumber;
         if (slot.walked) {
             h.walkedFrame = frameNumber;
+            h.walkedRecorded = slot.recorded;
             h.walkedFirst = slot.walkedFirst;
             h.walkedCount = slot.walkedCount;
         }

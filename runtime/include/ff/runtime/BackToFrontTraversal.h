@@ -76,8 +76,14 @@ private:
     enum class Pass { Everything, GeometryOnly, CubesOnly };
 
     Status walk(Pass pass, FrameStats& stats);
-    void
-    visit(const storage::NodeRecord& node, storage::NodeRef ref, std::size_t active, int depth);
+    /** `ask`: whether the visibility may know anything of the node (not below a node an
+     *  earlier walk went through whole). */
+    void visit(
+            const storage::NodeRecord& node,
+            storage::NodeRef ref,
+            std::size_t active,
+            int depth,
+            bool ask = true);
     void emitGeometry(const detail::PayloadRun& run, std::size_t active);
     void emitCube(const storage::NodeRecord& node, storage::NodeRef ref, std::size_t active);
     void defer(const storage::NodeRecord& node, storage::NodeRef ref, std::size_t active);

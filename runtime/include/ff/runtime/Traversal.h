@@ -80,14 +80,17 @@ public:
 
     struct Known {
         Visibility visibility = Visibility::Unknown;
-        /** An earlier walk of this frame went through the node's whole subtree and met these
-         *  cubes, in back-to-front order: a cubes-only walk draws them instead of walking it. */
+        /** An earlier walk of this frame went through the node's whole subtree: nothing below
+         *  it is known (a walk there need not ask). */
         bool walked = false;
+        /** And it kept the cubes it met there, `cubes` in back-to-front order: a cubes-only walk
+         *  draws them instead of walking the subtree. */
+        bool recorded = false;
         std::span<const MetCube> cubes;
     };
     /** The answer for `key` and, where there is one, the earlier walk's (one lookup). */
     [[nodiscard]] virtual Known known(const NodeKey& key) const {
-        return {visibility(key), false, {}};
+        return {visibility(key), false, false, {}};
     }
 };
 
