@@ -147,6 +147,20 @@ Walk walk(
     return w;
 }
 
+/** A cubes-only walk (OcclusionTraversal's pass 2) that keeps what it draws. */
+Walk walkCubesOnly(
+        const storage::SceneFile& scene,
+        IPageAccess& pages,
+        const FrameContext& frame,
+        IVisibility& visibility) {
+    BackToFrontTraversal traversal(scene, pages);
+    traversal.setCubesOnly(true);
+    AdmitAll admitAll;
+    Walk w{test::RecordingSink(true), {}, Status::ok()};
+    w.status = traversal.traverse(frame, {w.sink, visibility, admitAll}, w.stats);
+    return w;
+}
+
 class SphereTraversalTest : public ::testing::Test {
 protected:
     void SetUp() override {
@@ -419,16 +433,8 @@ TEST(SyntheticCutTest, ACubesOnlyWalkDrawsTheCubesAnEarlierWalkMetInsteadOfWalki
     ASSERT_TRUE(scene);
     MappedPageAccess pages(*scene);
     const FrameContext frame = wholeCut();
-    const auto cubesOnly = [&](IVisibility& visibility) {
-        BackToFrontTraversal traversal(*scene, pages);
-        traversal.setCubesOnly(true);
-        AdmitAll admitAll;
-        Walk w{test::RecordingSink(true), {}, Status::ok()};
-        w.status = traversal.traverse(frame, {w.sink, visibility, admitAll}, w.stats);
-        return w;
-    };
     NoVisibility none;
-    const Walk plain = cubesOnly(none);
+    const Walk plain = walkCubesOnly(*scene, pages, frame, none);
     ASSERT_TRUE(plain.status.isOk()) << plain.status.toString();
     ASSERT_EQ(plain.sink.cubes.size(), 64u);
     // The root, its 8 instance nodes, and each instance's root and 8 leaves.
@@ -451,7 +457,7 @@ TEST(SyntheticCutTest, ACubesOnlyWalkDrawsTheCubesAnEarlierWalkMetInsteadOfWalki
             {{{0.0f, 0.0f, 0.0f}, {0.1f, 0.1f, 0.1f}, 1, {red, red, red, red, red, red}}, 3, 1},
             {{{0.2f, 0.2f, 0.2f}, {0.3f, 0.3f, 0.3f}, 0, {red, red, red, red, red, red}}, 2, 1}};
     visibility.walked.push_back({{0, {scene->header().root.page, 1 + kOctant}}, met});
-    const Walk taken = cubesOnly(visibility);
+    const Walk taken = walkCubesOnly(*scene, pages, frame, visibility);
     ASSERT_TRUE(taken.status.isOk()) << taken.status.toString();
     EXPECT_EQ(taken.stats.nodesVisited, plain.stats.nodesVisited - 9u) << "not walked below it";
     ASSERT_EQ(taken.sink.cubes.size(), 64u - 8u + 2u);
@@ -481,16 +487,8 @@ TEST(SyntheticCutTest, ACubesOnlyWalkAsksNothingBelowANodeAnEarlierWalkWentThrou
     ASSERT_TRUE(scene);
     MappedPageAccess pages(*scene);
     const FrameContext frame = wholeCut();
-    const auto cubesOnly = [&](IVisibility& visibility) {
-        BackToFrontTraversal traversal(*scene, pages);
-        traversal.setCubesOnly(true);
-        AdmitAll admitAll;
-        Walk w{test::RecordingSink(true), {}, Status::ok()};
-        w.status = traversal.traverse(frame, {w.sink, visibility, admitAll}, w.stats);
-        return w;
-    };
     FakeVisibility everywhere;
-    const Walk plain = cubesOnly(everywhere);
+    const Walk plain = walkCubesOnly(*scene, pages, frame, everywhere);
     ASSERT_TRUE(plain.status.isOk()) << plain.status.toString();
     // The root, its 8 instance nodes and each instance's root: the leaves are cubes.
     ASSERT_EQ(everywhere.asked.size(), 1u + 8u + 8u);
@@ -499,7 +497,7 @@ TEST(SyntheticCutTest, ACubesOnlyWalkAsksNothingBelowANodeAnEarlierWalkWentThrou
     const NodeKey instanceNode{0, {scene->header().root.page, 1 + kOctant}};
     FakeVisibility visibility;
     visibility.walkedWhole.push_back(instanceNode);
-    const Walk taken = cubesOnly(visibility);
+    const Walk taken = walkCubesOnly(*scene, pages, frame, visibility);
     ASSERT_TRUE(taken.status.isOk()) << taken.status.toString();
     EXPECT_EQ(visibility.asked.size(), everywhere.asked.size() - 1u) << "its instance's root";
     EXPECT_NE(std::find(visibility.asked.begin(), visibility.asked.end(), instanceNode), visibility.asked.end());
