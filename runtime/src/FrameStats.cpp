@@ -28,6 +28,7 @@ std::string FrameStats::toJson() const {
             {"pages_decoded_on_draw", pagesDecodedOnDraw},
             {"occlusion_queries", occlusionQueries},
             {"queries_waited", queriesWaited},
+            {"occlusion_skipped", occlusionSkipped},
             {"select_ms", selectMs},
             {"occlusion_ms", occlusionMs},
             {"draw_ms", drawMs},

@@ -131,6 +131,9 @@ const std::vector<Column>& columns() {
             // Added by issue 15 later, once format 2's records carried subtree counts.
             {{"triangles_occluded", "triangles below the nodes a test found hidden (format 2)"},
              [](T t) { return count(t.stats.trianglesOccluded); }},
+            // Added by issue 15, once frames could go untested where culling did not pay.
+            {{"occlusion_skipped", "1: drawn without occlusion tests, as the last tested frame hid too little"},
+             [](T t) { return count(t.stats.occlusionSkipped); }},
     };
     return table;
 }

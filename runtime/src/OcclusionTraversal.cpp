@@ -67,6 +67,13 @@ constexpr double kPriorAnswers = 2.0;
  *  stay drawn until its next late test (up to visibleTestInterval frames). The frame after a
  *  jump starts without history, as the first frame does. An orbit of 120 frames a turn moves
  *  about 5 % of its radius a frame; a walk, a few percent. */
+/** After a frame whose tests hid less than OcclusionOptions::minHiddenShare of its work, this
+ *  many frames are drawn without tests, unless the camera jumps (the view there is new); the
+ *  next one is tested as a first frame. A tested frame costs more than a frustum-culled one
+ *  where nothing is hidden: the forest seen from its edge, where every tree's box shows some
+ *  canopy over the row in front, 5-15 % warm and 20-27 % without history; one such frame in
+ *  nine leaves about a ninth of that. */
+constexpr std::uint32_t kUnpaidFrames = 8;
 constexpr float kJumpDegrees = 30.0f;
 constexpr float kJumpShareOfDistance = 0.25f;
 
@@ -227,6 +234,12 @@ struct OcclusionTraversal::Impl {
     }
 
     Status traverse(const FrameContext& frame, TraversalServices services, FrameStats& stats);
+    /** Whether this frame goes without tests (kUnpaidFrames), counting it if so. */
+    bool skipsTests();
+    /** The frame as frustum culling draws it: one back-to-front walk, no tests. */
+    Status drawUntested();
+    /** After a tested frame: whether the next ones go without tests. */
+    void judgeFrame();
     void process(const Entry& entry);
     /** Draws a node found (or taken as) visible: its cube is pass 2's, a refined node's
      *  geometry is drawn and its children queued. `answered`: this frame's test found it
@@ -336,7 +349,9 @@ struct OcclusionTraversal::Impl {
      *  std::unordered_map (an allocation per entry) the lookups were the top symbol of the
      *  forest's edge view (10.6 % of its samples in perf; 2.4 % with this map). */
     absl::flat_hash_map<NodeKey, History, NodeKeyHash> history;
-    std::optional<Camera> lastCamera; ///< the last frame's (jumped())
+    std::optional<Camera> lastCamera; ///< the last tested frame's (jumped())
+    /** Frames still to be drawn without tests: the last tested one hid too little (kUnpaidFrames). */
+    std::uint32_t untestedFramesLeft = 0;
     double mostTrianglesPerNode = 1.0; ///< the largest trianglesPerNode() of the prototypes
     HistoryVisibility historyView;
     FrameOccluded occluded;
@@ -348,6 +363,7 @@ struct OcclusionTraversal::Impl {
         absl::flat_hash_map<NodeKey, History, NodeKeyHash> history;
         std::optional<Camera> lastCamera;
         std::uint32_t frameNumber = 0;
+        std::uint32_t untestedFramesLeft = 0;
     };
     bool redrawable = false;
     bool redraw = false;
@@ -363,6 +379,8 @@ struct OcclusionTraversal::Impl {
     bool depthWritten = false; ///< some geometry reached GL this frame: tests have occluders
     bool withoutHistory = false; ///< the first frame or one after a jump
     std::uint32_t waits = 0;     ///< answers waited for this frame
+    /** What the nodes this frame's tests hid would have drawn (testSaves(), summed). */
+    double hiddenSaves = 0.0;
     /** On a frame without history: nodes answered since the depth drawn last changed
      *  (kPriorHiddenShare), and how many of them were hidden. */
     std::uint32_t coldAnswers = 0;
@@ -462,10 +480,13 @@ Status OcclusionTraversal::Impl::traverse(
         history = frameStart->history;
         lastCamera = frameStart->lastCamera;
         frameNumber = frameStart->frameNumber;
+        untestedFramesLeft = frameStart->untestedFramesLeft;
     } else if (redrawable && !frameStart) {
-        frameStart = FrameStart{history, lastCamera, frameNumber};
+        frameStart = FrameStart{history, lastCamera, frameNumber, untestedFramesLeft};
     }
     redraw = false;
+    if (skipsTests())
+        return drawUntested();
     ++frameNumber;
     const storage::FileHeader& header = scene.header();
     if (lastCamera && jumped(*lastCamera, frame->camera, toVec3(header.boundsMin), toVec3(header.boundsMax)))
@@ -473,6 +494,7 @@ Status OcclusionTraversal::Impl::traverse(
     lastCamera = frame->camera;
     withoutHistory = history.empty();
     waits = 0;
+    hiddenSaves = 0.0;
     coldAnswers = 0;
     coldHidden = 0;
     evidenceDepth = 0;
@@ -581,6 +603,7 @@ Status OcclusionTraversal::Impl::traverse(
     const auto asked = std::chrono::steady_clock::now();
     finishFrame();
     stats->occlusionMs += millisecondsSince(asked);
+    judgeFrame();
     failures = nodePages.newFailures();
     for (const Status& failure : cubes.newFailures())
         if (std::find_if(failures.begin(), failures.end(), [&](const Status& f) {
@@ -1011,6 +1034,7 @@ void OcclusionTraversal::Impl::answer(const Query& query, bool visible) {
             h.hiddenTests = static_cast<std::uint16_t>(
                     std::min<int>(h.hiddenTests + 1, std::numeric_limits<std::uint16_t>::max()));
             ++stats->nodesOccluded;
+            hiddenSaves += node.entry.testSaves;
             if (node.entry.subtreeTriangles >= 0.0f)
                 stats->trianglesOccluded += static_cast<std::uint64_t>(std::llround(node.entry.subtreeTriangles));
             h.occludedFrame = frameNumber;
@@ -1292,6 +1316,47 @@ std::uint64_t OcclusionTraversal::Impl::estimatedTriangles(const Entry& entry) c
                                       ? 0
                                       : static_cast<std::uint64_t>(entry.record.geometryCount);
     return std::max({byLevel, byArea, own});
+}
+
+bool OcclusionTraversal::Impl::skipsTests() {
+    if (untestedFramesLeft == 0)
+        return false;
+    const storage::FileHeader& header = scene.header();
+    if (!lastCamera || jumped(*lastCamera, frame->camera, toVec3(header.boundsMin), toVec3(header.boundsMax))) {
+        untestedFramesLeft = 0; // a new view: what hid too little there says nothing here
+        return false;
+    }
+    --untestedFramesLeft;
+    return true;
+}
+
+Status OcclusionTraversal::Impl::drawUntested() {
+    ++stats->occlusionSkipped;
+    cubes.setCubesOnly(false);
+    const Status drawn = cubes.traverse(*frame, *services, *stats);
+    cubes.setCubesOnly(true);
+    failures = cubes.newFailures();
+    return drawn;
+}
+
+void OcclusionTraversal::Impl::judgeFrame() {
+    const OcclusionOptions& options = frame->occlusion;
+    // The diagnostics measure the tests themselves: every frame is tested.
+    if (!options.coherent || options.ignoreAnswers || options.minHiddenShare <= 0.0f)
+        return;
+    // A frame still waiting for pages draws their cubes, which hide nothing: what its tests
+    // found says little of what the frame will hide once the pages are in.
+    if (stats->nodesDeferred > 0 || stats->pagesMissing > 0)
+        return;
+    const double drawn = static_cast<double>(stats->trianglesDrawn + stats->cubesDrawn);
+    if (hiddenSaves >= static_cast<double>(options.minHiddenShare) * (hiddenSaves + drawn))
+        return;
+    untestedFramesLeft = kUnpaidFrames;
+    // The next tested frame starts afresh, as a first frame: with the history of frames ago it
+    // would draw untested what was visible then, and test late only an interval's share of it
+    // (visibleTestInterval), so what came to be hidden since would go unseen for many frames.
+    // Until then the prefetch walk skips nothing either, as the frames draw everything.
+    history.clear();
 }
 
 double OcclusionTraversal::Impl::testSaves(const Entry& entry) const {

@@ -399,6 +399,49 @@ TEST_P(BothBackends, HistoryNeverHidesWhatJustCameIntoView) {
     EXPECT_LE(differingPixels(culled->image, reference->image), allowedPixels(culled->image));
 }
 
+TEST_P(BothBackends, FramesGoUntestedWhereCullingDoesNotPayUntilTheCameraJumps) {
+    // From the side nothing is hidden: the first frame's tests hide nothing, so the next frames
+    // are drawn as frustum culling draws them, without tests, then one is tested again; a jump
+    // to where the wall hides the statue is tested at once.
+    open(buildWallAndStatue(freshDir()));
+    const Camera side = Camera::lookAt({14, 0, -4}, {0, 0, -4}, {0, 1, 0}, 0.8f);
+    const Camera front = Camera::lookAt({0, 0, 12}, {0, 0, 0}, {0, 1, 0}, 0.8f);
+    auto reference = mPlain->render(frame(side, 1.0f, false));
+    ASSERT_TRUE(reference.isOk()) << reference.status().toString();
+    std::vector<int> untested;
+    for (int f = 0; f < 12; ++f) {
+        SCOPED_TRACE("frame " + std::to_string(f));
+        auto culled = mCulling->render(frame(side, 1.0f, true));
+        ASSERT_TRUE(culled.isOk()) << culled.status().toString();
+        EXPECT_EQ(culled->stats.nodesOccluded, 0u);
+        EXPECT_EQ(culled->stats.trianglesDrawn, reference->stats.trianglesDrawn);
+        if (culled->stats.occlusionSkipped == 0) {
+            EXPECT_GE(culled->stats.occlusionQueries, 1u);
+            EXPECT_LE(differingPixels(culled->image, reference->image), allowedPixels(culled->image));
+            continue;
+        }
+        untested.push_back(f);
+        EXPECT_EQ(culled->stats.occlusionQueries, 0u);
+        EXPECT_EQ(differingPixels(culled->image, reference->image), 0u) << "frustum culling's frame";
+    }
+    EXPECT_EQ(untested, (std::vector<int>{1, 2, 3, 4, 5, 6, 7, 8, 10, 11}));
+
+    auto jumped = mCulling->render(frame(front, 1.0f, true));
+    ASSERT_TRUE(jumped.isOk()) << jumped.status().toString();
+    EXPECT_EQ(jumped->stats.occlusionSkipped, 0u);
+    EXPECT_EQ(jumped->stats.trianglesDrawn, kWallTriangles);
+
+    // Told to test every frame, it does.
+    for (int f = 0; f < 3; ++f) {
+        SCOPED_TRACE("every frame " + std::to_string(f));
+        FrameContext always = frame(side, 1.0f, true);
+        always.occlusion.minHiddenShare = 0.0f;
+        auto culled = mCulling->render(always);
+        ASSERT_TRUE(culled.isOk()) << culled.status().toString();
+        EXPECT_EQ(culled->stats.occlusionSkipped, 0u);
+    }
+}
+
 /** A walk with jumps: orbit steps, a teleport to the far side, a view from inside, and back. */
 std::vector<Camera> walkWithJumps(const Bounds& bounds) {
     std::vector<Camera> cameras;

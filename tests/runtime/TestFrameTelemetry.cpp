@@ -71,7 +71,9 @@ const std::vector<std::string> kPinnedColumns = {
         "splats",
         "fallbacks",
         // Added by issue 15, once format 2's records carried subtree counts.
-        "triangles_occluded"};
+        "triangles_occluded",
+        // Added by issue 15, once frames could go untested where culling did not pay.
+        "occlusion_skipped"};
 
 TEST(FrameTelemetryTest, ColumnsAreThePinnedOnesInOrder) {
     EXPECT_EQ(telemetryColumnNames(), kPinnedColumns);

@@ -135,6 +135,14 @@ void addOcclusionOptions(CLI::App& cmd, runtime::OcclusionOptions& occlusion, bo
                "Occlusion tests a frame may issue at most (past it, untested nodes are drawn)")
             ->check(CLI::PositiveNumber)
             ->capture_default_str();
+    cmd.add_option(
+               "--occlusion-min-hidden",
+               occlusion.minHiddenShare,
+               "With occlusion culling: after a frame whose tests hid less than this share of what "
+               "it drew (estimated), the next 8 frames go without tests, as frustum culling draws "
+               "them, unless the camera jumps (0: test every frame)")
+            ->check(CLI::Range(0.0f, 1.0f))
+            ->capture_default_str();
 }
 
 } // namespace ff::viewer

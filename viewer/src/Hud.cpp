@@ -88,13 +88,14 @@ std::string formatHud(const HudInfo& info) {
         std::snprintf(
                 line,
                 sizeof(line),
-                "occlusion %.1f ms  queries %llu (waited %llu)  occluded %llu (%s triangles)  render rate %.2f %%\n",
+                "occlusion %.1f ms  queries %llu (waited %llu)  occluded %llu (%s triangles)  render rate %.2f %%%s\n",
                 info.occlusionMs,
                 static_cast<unsigned long long>(info.occlusionQueries),
                 static_cast<unsigned long long>(info.queriesWaited),
                 static_cast<unsigned long long>(info.nodesOccluded),
                 withThousands(info.trianglesOccluded).c_str(),
-                info.renderRatePercent);
+                info.renderRatePercent,
+                info.occlusionSkipped ? "  (untested: culling did not pay)" : "");
         text += line;
     }
     std::snprintf(

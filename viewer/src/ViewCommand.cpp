@@ -325,6 +325,7 @@ int runView(const ViewArgs& args) {
             hudInfo.occlusionMs = stats->occlusionMs;
             hudInfo.occlusionQueries = stats->occlusionQueries;
             hudInfo.queriesWaited = stats->queriesWaited;
+            hudInfo.occlusionSkipped = stats->occlusionSkipped != 0;
             hudInfo.nodesOccluded = stats->nodesOccluded;
             hudInfo.trianglesOccluded = stats->trianglesOccluded;
             hudInfo.renderRatePercent = streaming.lastFrame().renderRatePercent;

@@ -65,6 +65,7 @@ struct HudInfo {
     double occlusionMs = 0.0;           ///< occlusion tests of the last frame
     std::uint64_t occlusionQueries = 0;
     std::uint64_t queriesWaited = 0;
+    bool occlusionSkipped = false; ///< drawn without tests (OcclusionOptions::minHiddenShare)
     std::uint64_t nodesOccluded = 0;
     std::uint64_t trianglesOccluded = 0; ///< below them (format 2; 0 for format 1)
     double renderRatePercent = 0.0; ///< triangles drawn, % of the scene's

@@ -74,6 +74,12 @@ struct OcclusionOptions {
      *  most that share of light would show through: approximate. */
     bool cubesOcclude = true;
     float opacityThreshold = 0.0f;
+    /** Where culling does not pay, frames go without it: after a frame whose tests hid less
+     *  than this share of the work (the triangles and cubes their subtrees would have drawn,
+     *  estimated, against those drawn), the next frames are drawn with frustum culling alone,
+     *  no tests and no second pass, until a few have passed or the camera jumps; then a frame
+     *  tests again (docs/methods.md §9). 0: every frame is culled. */
+    float minHiddenShare = 0.05f;
 };
 
 /**

@@ -45,6 +45,9 @@ struct FrameStats {
     std::uint64_t pagesDecodedOnDraw = 0;
     std::uint64_t occlusionQueries = 0; ///< occlusion tests issued (a multiquery counts once)
     std::uint64_t queriesWaited = 0;    ///< answers the walk had to wait for (nothing else to do)
+    /** With occlusion culling on: 1 if the frame was drawn without tests, because the last
+     *  tested frame hid too little to pay for them (OcclusionOptions::minHiddenShare). */
+    std::uint64_t occlusionSkipped = 0;
     double selectMs = 0.0; ///< traversal, not counting the batches the renderer drew meanwhile
     double drawMs = 0.0;   ///< every batch's uploads and submission + GPU until finished (glFinish)
     double occlusionMs = 0.0; ///< issuing occlusion tests and reading (or waiting for) answers
