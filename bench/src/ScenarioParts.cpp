@@ -206,11 +206,20 @@ Status setMethodKey(MethodSpec& method, const std::string& key, const nlohmann::
         method.occlusion.opacityThreshold = value.get<float>();
         return Status::ok();
     }
+    if (key == "occlusion_min_hidden") {
+        if (!value.is_number() || !(value.get<double>() >= 0.0 && value.get<double>() <= 1.0))
+            return Status(
+                    ErrorCode::InvalidArgument,
+                    "occlusion_min_hidden: expected a share in [0, 1] (0: every frame tested), got " + value.dump());
+        method.occlusion.minHiddenShare = value.get<float>();
+        return Status::ok();
+    }
     return Status(
             ErrorCode::InvalidArgument,
             "\"" + key +
                     "\" is not a method key a sweep can vary (eps, cube_draw, cube_anisotropy, representation, splat_size, "
-                    "splat_shape, occlusion, coherence, oracle, occlusion_backend, cube_occluders, opacity_threshold)");
+                    "splat_shape, occlusion, coherence, oracle, occlusion_backend, cube_occluders, opacity_threshold, "
+                    "occlusion_min_hidden)");
 }
 
 std::vector<MethodSpec> readMethods(ScenarioReader& reader) {

@@ -84,7 +84,8 @@ struct MethodSpec {
 /** Method keys a sweep may vary (the others, label and method, name what is swept). */
 inline constexpr const char* kSweepableMethodKeys[] = {
         "eps",       "cube_draw",        "cube_anisotropy",   "representation", "splat_size", "splat_shape",
-        "occlusion", "coherence",        "oracle",            "occlusion_backend", "cube_occluders", "opacity_threshold"};
+        "occlusion", "coherence",        "oracle",            "occlusion_backend", "cube_occluders", "opacity_threshold",
+        "occlusion_min_hidden"};
 
 /** Reads "methods" (a non-empty array; labels unique); errors go to the reader. */
 std::vector<MethodSpec> readMethods(ScenarioReader& reader);

@@ -15,6 +15,7 @@
 #include <deque>
 #include <limits>
 #include <optional>
+#include <utility>
 #include <absl/container/flat_hash_map.h>
 
 namespace ff::runtime {
@@ -69,10 +70,12 @@ constexpr double kPriorAnswers = 2.0;
  *  about 5 % of its radius a frame; a walk, a few percent. */
 /** After a frame whose tests hid less than OcclusionOptions::minHiddenShare of its work, this
  *  many frames are drawn without tests, unless the camera jumps (the view there is new); the
- *  next one is tested as a first frame. A tested frame costs more than a frustum-culled one
- *  where nothing is hidden: the forest seen from its edge, where every tree's box shows some
- *  canopy over the row in front, 5-15 % warm and 20-27 % without history; one such frame in
- *  nine leaves about a ninth of that. */
+ *  next one is tested with the history they left, late-testing every visible leaf. A tested
+ *  frame costs more than a frustum-culled one where nothing is hidden: the forest seen from its
+ *  edge, where every tree's box shows some canopy over the row in front, 5-15 % warm; one such
+ *  frame in nine leaves about a ninth of that. (Tested as a first frame instead, without
+ *  history, it cost the cathedral's walk more than it saved: a cold frame there costs a third
+ *  more than frustum culling's.) */
 constexpr std::uint32_t kUnpaidFrames = 8;
 constexpr float kJumpDegrees = 30.0f;
 constexpr float kJumpShareOfDistance = 0.25f;
@@ -220,6 +223,13 @@ struct OcclusionTraversal::Impl {
     struct LateQuery {
         QueryTicket ticket;
         NodeKey key;
+        float saves; ///< testSaves() of the node, counted in hiddenSaves if it is hidden
+    };
+    /** A late test not issued yet (issueLate()). */
+    struct LateTest {
+        OcclusionBox box;
+        NodeKey key;
+        float saves;
     };
 
     Impl(const storage::SceneIndex& sceneFile, IPageAccess& pages)
@@ -352,6 +362,7 @@ struct OcclusionTraversal::Impl {
     std::optional<Camera> lastCamera; ///< the last tested frame's (jumped())
     /** Frames still to be drawn without tests: the last tested one hid too little (kUnpaidFrames). */
     std::uint32_t untestedFramesLeft = 0;
+    bool lastUntested = false; ///< the last frame went without tests
     double mostTrianglesPerNode = 1.0; ///< the largest trianglesPerNode() of the prototypes
     HistoryVisibility historyView;
     FrameOccluded occluded;
@@ -364,6 +375,7 @@ struct OcclusionTraversal::Impl {
         std::optional<Camera> lastCamera;
         std::uint32_t frameNumber = 0;
         std::uint32_t untestedFramesLeft = 0;
+        bool lastUntested = false;
     };
     bool redrawable = false;
     bool redraw = false;
@@ -379,7 +391,11 @@ struct OcclusionTraversal::Impl {
     bool depthWritten = false; ///< some geometry reached GL this frame: tests have occluders
     bool withoutHistory = false; ///< the first frame or one after a jump
     std::uint32_t waits = 0;     ///< answers waited for this frame
-    /** What the nodes this frame's tests hid would have drawn (testSaves(), summed). */
+    /** The frames before this one went without tests, from this one's history: it late-tests
+     *  every visible leaf, not an interval's share, to judge with all of them (judgeFrame()). */
+    bool afterUntested = false;
+    /** What the nodes this frame's tests (late ones too) hid would have drawn (testSaves(),
+     *  summed). */
     double hiddenSaves = 0.0;
     /** On a frame without history: nodes answered since the depth drawn last changed
      *  (kPriorHiddenShare), and how many of them were hidden. */
@@ -402,7 +418,7 @@ struct OcclusionTraversal::Impl {
      *  thousands of occluder cubes), and only with the budget this frame's own tests left: they
      *  are for the next frame, and one taken from a node still waiting for its answer has it
      *  drawn untested now (the 100 k-atom molecule's cold frame spends the whole budget). */
-    std::vector<std::pair<OcclusionBox, NodeKey>> lateWaiting;
+    std::vector<LateTest> lateWaiting;
     std::vector<detail::PayloadRun> runs;
     struct ChildRecord {
         storage::NodeRecord record;
@@ -481,11 +497,13 @@ Status OcclusionTraversal::Impl::traverse(
         lastCamera = frameStart->lastCamera;
         frameNumber = frameStart->frameNumber;
         untestedFramesLeft = frameStart->untestedFramesLeft;
+        lastUntested = frameStart->lastUntested;
     } else if (redrawable && !frameStart) {
-        frameStart = FrameStart{history, lastCamera, frameNumber, untestedFramesLeft};
+        frameStart = FrameStart{history, lastCamera, frameNumber, untestedFramesLeft, lastUntested};
     }
     redraw = false;
-    if (skipsTests())
+    const bool untestedBefore = std::exchange(lastUntested, skipsTests());
+    if (lastUntested)
         return drawUntested();
     ++frameNumber;
     const storage::FileHeader& header = scene.header();
@@ -493,6 +511,7 @@ Status OcclusionTraversal::Impl::traverse(
         history.clear();
     lastCamera = frame->camera;
     withoutHistory = history.empty();
+    afterUntested = untestedBefore && !withoutHistory;
     waits = 0;
     hiddenSaves = 0.0;
     coldAnswers = 0;
@@ -1045,25 +1064,28 @@ void OcclusionTraversal::Impl::answer(const Query& query, bool visible) {
 void OcclusionTraversal::Impl::testLate(const Entry& entry, std::uint32_t slot) {
     if (!frame->occlusion.coherent)
         return; // late answers are for the next frame's history
-    // Spread over frames: each node at its own phase of the interval.
-    const std::uint32_t interval = std::max<std::uint32_t>(frame->occlusion.visibleTestInterval, 1);
+    // Spread over frames: each node at its own phase of the interval. After frames without
+    // tests, all at once: this frame's history is theirs, and it must see what came to be
+    // hidden meanwhile to judge whether testing pays again (judgeFrame()).
+    const std::uint32_t interval =
+            afterUntested ? 1 : std::max<std::uint32_t>(frame->occlusion.visibleTestInterval, 1);
     const std::size_t phase = NodeKeyHash{}(slots[slot].key) % interval;
     if ((frameNumber + phase) % interval != 0 || !budgetLeft())
         return;
     OcclusionBox box;
     if (!testable(entry, box))
         return;
-    lateWaiting.emplace_back(box, slots[slot].key);
+    lateWaiting.push_back({box, slots[slot].key, entry.testSaves});
 }
 
 void OcclusionTraversal::Impl::issueLate() {
     if (lateWaiting.empty())
         return;
     const auto start = std::chrono::steady_clock::now();
-    for (const auto& [box, key] : lateWaiting) {
+    for (const LateTest& test : lateWaiting) {
         if (!budgetLeft())
             break; // the rest keep last frame's answer
-        late.push_back({issue({&box, 1}), key});
+        late.push_back({issue({&test.box, 1}), test.key, test.saves});
     }
     lateWaiting.clear();
     stats->occlusionMs += millisecondsSince(start);
@@ -1326,6 +1348,7 @@ bool OcclusionTraversal::Impl::skipsTests() {
         untestedFramesLeft = 0; // a new view: what hid too little there says nothing here
         return false;
     }
+    lastCamera = frame->camera; // a jump is counted from frame to frame, as when testing
     --untestedFramesLeft;
     return true;
 }
@@ -1352,11 +1375,6 @@ void OcclusionTraversal::Impl::judgeFrame() {
     if (hiddenSaves >= static_cast<double>(options.minHiddenShare) * (hiddenSaves + drawn))
         return;
     untestedFramesLeft = kUnpaidFrames;
-    // The next tested frame starts afresh, as a first frame: with the history of frames ago it
-    // would draw untested what was visible then, and test late only an interval's share of it
-    // (visibleTestInterval), so what came to be hidden since would go unseen for many frames.
-    // Until then the prefetch walk skips nothing either, as the frames draw everything.
-    history.clear();
 }
 
 double OcclusionTraversal::Impl::testSaves(const Entry& entry) const {
@@ -1427,6 +1445,7 @@ void OcclusionTraversal::Impl::finishFrame() {
             if (services->occlusion->anyVisible(query.ticket))
                 continue;
             // Hidden now: tested before it is drawn next frame.
+            hiddenSaves += query.saves;
             History& h = history[query.key];
             h.hidden = true;
             h.lastVisible = 0;

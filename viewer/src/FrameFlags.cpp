@@ -140,7 +140,8 @@ void addOcclusionOptions(CLI::App& cmd, runtime::OcclusionOptions& occlusion, bo
                occlusion.minHiddenShare,
                "With occlusion culling: after a frame whose tests hid less than this share of what "
                "it drew (estimated), the next 8 frames go without tests, as frustum culling draws "
-               "them, unless the camera jumps (0: test every frame)")
+               "them, unless the camera jumps (0: test every frame; measured no faster yet, "
+               "docs/methods.md §9)")
             ->check(CLI::Range(0.0f, 1.0f))
             ->capture_default_str();
 }
