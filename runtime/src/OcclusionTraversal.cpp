@@ -62,21 +62,21 @@ constexpr std::uint32_t kHeldBehindWaits = 32;
  *  edge.) */
 constexpr double kPriorHiddenShare = 0.5;
 constexpr double kPriorAnswers = 2.0;
+/** After a frame whose tests hid less than OcclusionOptions::minHiddenShare of its work, this
+ *  many frames are drawn without tests, unless the camera jumps (the view there is new); the
+ *  next one is tested with the history they left, late-testing every visible leaf. A tested
+ *  frame costs more than a frustum-culled one where nothing is hidden: the forest seen from its
+ *  edge, where every tree's box shows some canopy over the row in front, 5-15 % warm; one such
+ *  frame in nine should leave about a ninth of that (not measurable yet: docs/methods.md §9).
+ *  Tested as a first frame instead, without history, it cost the cathedral's walk more than it
+ *  saved: a cold frame there costs a third more than frustum culling's. */
+constexpr std::uint32_t kUnpaidFrames = 8;
 /** A camera that turned more than this since the last frame, or moved more than this share of
  *  its distance to the scene's centre (at least a tenth of the scene's diagonal, for an eye near
  *  the centre), jumped: what was visible there says little here, and drawn untested it would
  *  stay drawn until its next late test (up to visibleTestInterval frames). The frame after a
  *  jump starts without history, as the first frame does. An orbit of 120 frames a turn moves
  *  about 5 % of its radius a frame; a walk, a few percent. */
-/** After a frame whose tests hid less than OcclusionOptions::minHiddenShare of its work, this
- *  many frames are drawn without tests, unless the camera jumps (the view there is new); the
- *  next one is tested with the history they left, late-testing every visible leaf. A tested
- *  frame costs more than a frustum-culled one where nothing is hidden: the forest seen from its
- *  edge, where every tree's box shows some canopy over the row in front, 5-15 % warm; one such
- *  frame in nine leaves about a ninth of that. (Tested as a first frame instead, without
- *  history, it cost the cathedral's walk more than it saved: a cold frame there costs a third
- *  more than frustum culling's.) */
-constexpr std::uint32_t kUnpaidFrames = 8;
 constexpr float kJumpDegrees = 30.0f;
 constexpr float kJumpShareOfDistance = 0.25f;
 
@@ -1341,6 +1341,9 @@ std::uint64_t OcclusionTraversal::Impl::estimatedTriangles(const Entry& entry) c
 }
 
 bool OcclusionTraversal::Impl::skipsTests() {
+    const OcclusionOptions& options = frame->occlusion;
+    if (options.minHiddenShare <= 0.0f || !options.coherent || options.ignoreAnswers)
+        untestedFramesLeft = 0; // told since to test every frame
     if (untestedFramesLeft == 0)
         return false;
     const storage::FileHeader& header = scene.header();
