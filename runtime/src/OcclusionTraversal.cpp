@@ -250,6 +250,12 @@ struct OcclusionTraversal::Impl {
     Status drawUntested();
     /** After a tested frame: whether the next ones go without tests. */
     void judgeFrame();
+    /** Whether frames may go untested at all: OcclusionOptions::minHiddenShare is set and the
+     *  diagnostics, which measure the tests themselves, are off. */
+    bool mayGoUntested() const {
+        const OcclusionOptions& options = frame->occlusion;
+        return options.minHiddenShare > 0.0f && options.coherent && !options.ignoreAnswers;
+    }
     void process(const Entry& entry);
     /** Draws a node found (or taken as) visible: its cube is pass 2's, a refined node's
      *  geometry is drawn and its children queued. `answered`: this frame's test found it
@@ -1341,8 +1347,7 @@ std::uint64_t OcclusionTraversal::Impl::estimatedTriangles(const Entry& entry) c
 }
 
 bool OcclusionTraversal::Impl::skipsTests() {
-    const OcclusionOptions& options = frame->occlusion;
-    if (options.minHiddenShare <= 0.0f || !options.coherent || options.ignoreAnswers)
+    if (!mayGoUntested())
         untestedFramesLeft = 0; // told since to test every frame
     if (untestedFramesLeft == 0)
         return false;
@@ -1366,16 +1371,14 @@ Status OcclusionTraversal::Impl::drawUntested() {
 }
 
 void OcclusionTraversal::Impl::judgeFrame() {
-    const OcclusionOptions& options = frame->occlusion;
-    // The diagnostics measure the tests themselves: every frame is tested.
-    if (!options.coherent || options.ignoreAnswers || options.minHiddenShare <= 0.0f)
+    if (!mayGoUntested())
         return;
     // A frame still waiting for pages draws their cubes, which hide nothing: what its tests
     // found says little of what the frame will hide once the pages are in.
     if (stats->nodesDeferred > 0 || stats->pagesMissing > 0)
         return;
     const double drawn = static_cast<double>(stats->trianglesDrawn + stats->cubesDrawn);
-    if (hiddenSaves >= static_cast<double>(options.minHiddenShare) * (hiddenSaves + drawn))
+    if (hiddenSaves >= static_cast<double>(frame->occlusion.minHiddenShare) * (hiddenSaves + drawn))
         return;
     untestedFramesLeft = kUnpaidFrames;
 }
