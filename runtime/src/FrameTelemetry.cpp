@@ -129,7 +129,7 @@ const std::vector<Column>& columns() {
             {{"fallbacks", "cells drawn as the nearest kept kind to a forced one"},
              [](T t) { return count(t.stats.representationFallbacks); }},
             // Added by issue 15 later, once format 2's records carried subtree counts.
-            {{"triangles_occluded", "triangles below the nodes a test found hidden (format 2)"},
+            {{"triangles_occluded", "triangles below the nodes a test found hidden (format 2); the oracle: the frustum-culled frame's triangles it left out"},
              [](T t) { return count(t.stats.trianglesOccluded); }},
             // Added by issue 15, once frames could go untested where culling did not pay.
             {{"occlusion_skipped", "1: drawn without occlusion tests, as the last tested frame hid too little"},

@@ -579,9 +579,11 @@ public:
         return mRenderer.draw(mScratch, stats);
     }
 
-    /** Takes what was left out off the walk's counts. */
+    /** Takes what was left out off the walk's counts; the triangles left out are the frame's
+     *  occluded ones (of the cut the walk chose, not of the subtrees at full detail). */
     void countInto(FrameStats& stats) const {
         stats.trianglesDrawn -= mTrianglesLeft;
+        stats.trianglesOccluded += mTrianglesLeft;
         stats.cubesDrawn -= mCubesLeft;
         stats.cubeFacesDrawn -= mFacesLeft;
         stats.geometryDraws = static_cast<std::uint64_t>(static_cast<std::int64_t>(stats.geometryDraws) - mDrawsLeft);
