@@ -3,6 +3,8 @@
 #include "Decomposition.h"
 #include "SubtreeEncoder.h"
 
+#include <ff/storage/NodeCellV2.h>
+
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -278,8 +280,7 @@ Result<InstanceLevelResult> buildInstanceLevel(
         hi = glm::max(hi, p.worldMax);
     }
     const glm::vec3 size = hi - lo;
-    const float edge = std::max({size.x, size.y, size.z});
-    const Cell root{lo, edge * (1.0f + 1e-5f) + std::numeric_limits<float>::min()};
+    const Cell root{lo, storage::rootCellEdge({size.x, size.y, size.z})}; // as NodeCellV2.h reads it
 
     InstanceHierarchy hierarchy(std::move(placed), summaries, params);
     std::vector<BuildNode> nodes = hierarchy.run(root);
@@ -294,8 +295,8 @@ Result<InstanceLevelResult> buildInstanceLevel(
         for (std::size_t i = 0; i < instances.size(); ++i)
             drawn[i] = prototypes[instances[i].prototype].triangleCount;
         SubtreeV2Input input;
-        input.rootParent = {{result.boundsMin.x, result.boundsMin.y, result.boundsMin.z},
-                            {result.boundsMax.x, result.boundsMax.y, result.boundsMax.z}};
+        input.rootParent = rootParentV2({{result.boundsMin.x, result.boundsMin.y, result.boundsMin.z},
+                                         {result.boundsMax.x, result.boundsMax.y, result.boundsMax.z}});
         input.instanceTriangles = drawn;
         FF_ASSIGN_OR_RETURN(const SubtreeV2Result written, writeSubtreeV2(writer, *nodePageTable, std::move(nodes), {}, input));
         result.nodes = written.nodes;

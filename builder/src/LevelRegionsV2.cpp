@@ -111,7 +111,7 @@ struct LevelRegionsV2::Region {
     // Set by finish():
     std::vector<std::uint32_t> pageStart;      ///< position of each page's first record
     std::uint64_t firstOrdinal = 0;            ///< of its first node page in the NodePages table
-    std::vector<storage::NodeBox> parentBoxes; ///< per position, the parent's decoded bounds
+    std::vector<DecodedNodeV2> parents; ///< per position, what the record is read against
 };
 
 LevelRegionsV2::LevelRegionsV2(
@@ -241,6 +241,8 @@ Status LevelRegionsV2::append(LevelledSubtree& chunk, ChunkClustersV2& clusters)
             PendingNodeV2& p = pending[i];
             p.boundsMin = record.boundsMin;
             p.boundsMax = record.boundsMax;
+            p.cellMin = record.cellMin;
+            p.cellMax = record.cellMax;
             p.cube = record.cube;
             p.firstChild = record.childCount > 0 ? base[d + 1] + record.firstChild.slot : 0;
             p.firstRepresentation = first;
@@ -293,7 +295,7 @@ Status LevelRegionsV2::append(LevelledSubtree& chunk, ChunkClustersV2& clusters)
 }
 
 Status LevelRegionsV2::finish(
-        std::span<const storage::NodeBox> rootBoxes,
+        std::span<const DecodedNodeV2> rootBoxes,
         const std::function<void(std::uint64_t done, std::uint64_t total)>& pagesWritten) {
     if (rootBoxes.size() != mRoots.size())
         return Status(ErrorCode::Internal, "a decoded box per chunk root is needed");
@@ -320,9 +322,9 @@ Status LevelRegionsV2::finish(
         if (root.childCount == 0)
             continue;
         Region& below = *mRegions.at(root.level + 1);
-        below.parentBoxes.resize(below.count);
+        below.parents.resize(below.count);
         for (std::uint32_t k = 0; k < root.childCount; ++k)
-            below.parentBoxes[root.firstChild + k] = rootBoxes[c];
+            below.parents[root.firstChild + k] = rootBoxes[c];
         const auto page = static_cast<std::size_t>(
                 std::upper_bound(below.pageStart.begin(), below.pageStart.end(), root.firstChild) -
                 below.pageStart.begin() - 1);
@@ -348,7 +350,7 @@ Status LevelRegionsV2::writeRegion(std::size_t level, const std::function<void()
         return Status::ok();
     Region* below = level + 1 < mRegions.size() ? mRegions[level + 1].get() : nullptr;
     if (below != nullptr)
-        below->parentBoxes.resize(below->count);
+        below->parents.resize(below->count);
     const std::uint64_t slotsPerPage = storage::nodesPerPageV2(mWriter.pageSize());
     const auto indexBelow = [&](std::uint32_t position) {
         const auto page = static_cast<std::size_t>(
@@ -372,28 +374,31 @@ Status LevelRegionsV2::writeRegion(std::size_t level, const std::function<void()
                     storage::NodePageV2Writer& out = mTable.open();
                     for (std::uint32_t i = 0; i < r.pageFill[page]; ++i, ++position) {
                         const PendingNodeV2& p = pending[used + i];
-                        const storage::NodeBox& parent = r.parentBoxes.at(position);
+                        const DecodedNodeV2& parent = r.parents.at(position);
                         storage::NodeV2 node;
-                        node.bounds = boundsInside(p.boundsMin, p.boundsMax, parent);
                         node.cube = p.cube;
                         node.subtreeTriangles = p.drawnTriangles;
                         node.flags = p.flags;
+                        FF_ASSIGN_OR_RETURN(
+                                const DecodedNodeV2 decoded,
+                                placeUnder(
+                                        node,
+                                        {p.boundsMin, p.boundsMax},
+                                        {p.cellMin, p.cellMax},
+                                        parent));
                         if (p.childCount > 0) {
                             FF_ASSERT(below != nullptr);
                             node.firstChild = indexBelow(p.firstChild);
                             node.childCount = p.childCount;
-                            FF_ASSIGN_OR_RETURN(
-                                    const storage::NodeBox decoded,
-                                    storage::quantizeBoundsOutward(node.bounds, parent));
                             for (std::uint32_t k = 0; k < p.childCount; ++k)
-                                below->parentBoxes.at(p.firstChild + k) = decoded;
+                                below->parents.at(p.firstChild + k) = decoded;
                         }
                         reps.clear();
                         for (std::uint32_t k = 0; k < p.representationCount; ++k)
                             reps.push_back(r.packer.relocated(
                                     r.representations.at(p.firstRepresentation + k)));
                         FF_ASSIGN_OR_RETURN(
-                                const std::uint32_t slot, out.append(node, parent, reps));
+                                const std::uint32_t slot, out.append(node, parent.bounds, reps));
                         FF_ASSERT(slot == i);
                     }
                     FF_RETURN_IF_ERROR(mTable.writeOpen(mWriter));
@@ -406,7 +411,7 @@ Status LevelRegionsV2::writeRegion(std::size_t level, const std::function<void()
             }));
     FF_ASSERT(page == r.pageFill.size() && pending.empty());
     r.records.remove();
-    r.parentBoxes = std::vector<storage::NodeBox>();
+    r.parents = std::vector<DecodedNodeV2>();
     r.representations = std::vector<storage::RepresentationRecord>();
     return Status::ok();
 }

@@ -89,12 +89,12 @@ public:
 
     /**
      * Writes the open cluster pages, then every level's node pages top-down, each record
-     * relative to its parent's decoded bounds; `rootBoxes[c]` is the decoded bounds of the c-th
-     * appended chunk's root (decodedBoxesV2 of the tree above the chunks). Then placedRoot()
-     * says where each root's children and payload went.
+     * read against its parent's decoded bounds and cell; `rootBoxes[c]` is what the c-th
+     * appended chunk's root decodes to (decodedNodesV2 of the tree above the chunks). Then
+     * placedRoot() says where each root's children and payload went.
      */
     [[nodiscard]] Status
-    finish(std::span<const storage::NodeBox> rootBoxes,
+    finish(std::span<const DecodedNodeV2> rootBoxes,
            const std::function<void(std::uint64_t done, std::uint64_t total)>& pagesWritten = {});
 
     /** After finish(): what the record of chunk `chunk`'s root (node `node` of the tree above)

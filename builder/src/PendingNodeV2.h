@@ -10,6 +10,8 @@ namespace ff::builder {
 struct PendingNodeV2 {
     std::array<float, 3> boundsMin;
     std::array<float, 3> boundsMax;
+    std::array<float, 3> cellMin; ///< the box its cube was baked over
+    std::array<float, 3> cellMax;
     std::array<std::array<std::uint8_t, 4>, 6> cube;
     std::uint32_t firstChild;          ///< position in the next level's region
     std::uint32_t firstRepresentation; ///< in its region's representations
@@ -19,6 +21,6 @@ struct PendingNodeV2 {
     std::uint8_t flags; ///< storage::NodeFlagsV2
     std::uint8_t reserved;
 };
-static_assert(sizeof(PendingNodeV2) == 64);
+static_assert(sizeof(PendingNodeV2) == 88);
 
 } // namespace ff::builder

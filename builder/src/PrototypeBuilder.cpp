@@ -9,6 +9,7 @@
 #include "SubtreeEncoder.h"
 
 #include <ff/storage/Assert.h>
+#include <ff/storage/NodeCellV2.h>
 
 #include <algorithm>
 #include <cmath>
@@ -180,10 +181,10 @@ Result<PrototypeBuildResult> PrototypeBuilder::build(
     const bool v2 = mWriter.formatVersion() == storage::kFormatVersion2;
     if (v2 && (encoding == nullptr || mNodePageTable == nullptr))
         return Status(ErrorCode::Internal, "a format 2 build without a position grid or node page table");
-    // The root cell is a cube around the bounds, a hair larger so no centroid sits on its max face.
+    // The root cell is a cube around the bounds, a hair larger so no centroid sits on its max
+    // face; a format 2 reader derives the same cube from the bounds (NodeCellV2.h).
     const glm::vec3 size = boundsMax - boundsMin;
-    const float edge = std::max({size.x, size.y, size.z});
-    float padded = edge * (1.0f + 1e-5f) + std::numeric_limits<float>::min();
+    float padded = storage::rootCellEdge({size.x, size.y, size.z});
     Cell root{boundsMin, padded};
     if (mParams.decomposition == Decomposition::Orsd) {
         // ORSD's blocks are the grid's: the root is its smallest power-of-two block, so that the
@@ -244,7 +245,7 @@ Result<PrototypeBuildResult> PrototypeBuilder::writeInMemoryV2(
     SubtreeV2Input input;
     input.prototype = encoding.storedIndex;
     input.grid = &encoding.grid;
-    input.rootParent = {{boundsMin.x, boundsMin.y, boundsMin.z}, {boundsMax.x, boundsMax.y, boundsMax.z}};
+    input.rootParent = rootParentV2({{boundsMin.x, boundsMin.y, boundsMin.z}, {boundsMax.x, boundsMax.y, boundsMax.z}});
     input.threads = mThreads;
     input.standIns = standInKinds(mParams);
     FF_RETURN_IF_ERROR(shapeLeavesV2(built.nodes, all, leafShapeV2(mParams, encoding.grid, mThreads)));
@@ -263,11 +264,11 @@ Result<PrototypeBuildResult> PrototypeBuilder::writeInMemoryV2(
     result.standIns = written.standIns;
     result.standInClusters = written.standInClusters;
     result.standInCounts = written.standInCounts;
-    result.record.boundsMin = input.rootParent.min;
-    result.record.boundsMax = input.rootParent.max;
+    result.record.boundsMin = input.rootParent.bounds.min;
+    result.record.boundsMax = input.rootParent.bounds.max;
     result.record.nodeCount = written.nodes;
     result.recordV2.rootNode = written.rootNode;
-    result.recordV2.bounds = input.rootParent;
+    result.recordV2.bounds = input.rootParent.bounds;
     result.recordV2.grid = encoding.grid;
     result.recordV2.triangleCount = written.storedTriangles;
     result.recordV2.nodeCount = written.nodes;
@@ -288,9 +289,10 @@ Result<PrototypeBuildResult> PrototypeBuilder::finishChunkedV2(
     FF_RETURN_IF_ERROR(shapeLeavesV2(nodes, ownTriangles, leafShapeV2(mParams, encoding.grid, mThreads)));
     const glm::vec3 boundsMin = nodes[0].boundsMin;
     const glm::vec3 boundsMax = nodes[0].boundsMax;
-    const storage::NodeBox rootParent{{boundsMin.x, boundsMin.y, boundsMin.z}, {boundsMax.x, boundsMax.y, boundsMax.z}};
-    const std::vector<storage::NodeBox> decoded = decodedBoxesV2(nodes, rootParent);
-    std::vector<storage::NodeBox> rootBoxes(result.chunks);
+    const DecodedNodeV2 rootParent =
+            rootParentV2({{boundsMin.x, boundsMin.y, boundsMin.z}, {boundsMax.x, boundsMax.y, boundsMax.z}});
+    const std::vector<DecodedNodeV2> decoded = decodedNodesV2(nodes, rootParent);
+    std::vector<DecodedNodeV2> rootBoxes(result.chunks);
     for (std::size_t n = 0; n < nodes.size(); ++n)
         if (chunkOf[n] >= 0)
             rootBoxes.at(static_cast<std::size_t>(chunkOf[n])) = decoded[n];
@@ -323,11 +325,11 @@ Result<PrototypeBuildResult> PrototypeBuilder::finishChunkedV2(
     result.nodePages = written.nodePages + levels.nodePages();
     result.maxDepth = std::max(written.maxLevel, levels.maxLevel());
     spillBytes += levels.spillBytes();
-    result.record.boundsMin = rootParent.min;
-    result.record.boundsMax = rootParent.max;
+    result.record.boundsMin = rootParent.bounds.min;
+    result.record.boundsMax = rootParent.bounds.max;
     result.record.nodeCount = result.nodes;
     result.recordV2.rootNode = written.rootNode;
-    result.recordV2.bounds = rootParent;
+    result.recordV2.bounds = rootParent.bounds;
     result.recordV2.grid = encoding.grid;
     result.recordV2.triangleCount = written.storedTriangles + levels.storedTriangles();
     result.recordV2.nodeCount = result.nodes;

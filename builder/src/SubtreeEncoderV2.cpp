@@ -5,6 +5,7 @@
 
 #include <ff/builder/ColorCube.h>
 #include <ff/storage/Assert.h>
+#include <ff/storage/NodeCellV2.h>
 #include <ff/storage/NodePageV2.h>
 
 #include <algorithm>
@@ -54,16 +55,24 @@ Tree breadthFirst(const std::vector<BuildNode>& nodes) {
     return tree;
 }
 
-std::vector<storage::NodeBox> decodedBoxes(
-        const std::vector<BuildNode>& nodes, const Tree& tree, const storage::NodeBox& rootParent) {
-    std::vector<storage::NodeBox> decoded(nodes.size());
+storage::NodeBox boxOf(const glm::vec3& min, const glm::vec3& max) {
+    return {toArray(min), toArray(max)};
+}
+
+std::vector<DecodedNodeV2> decodedNodes(
+        const std::vector<BuildNode>& nodes, const Tree& tree, const DecodedNodeV2& rootParent) {
+    std::vector<DecodedNodeV2> decoded(nodes.size());
     for (const std::uint32_t n : tree.order) {
-        const storage::NodeBox& parent =
+        const DecodedNodeV2& parent =
                 tree.parent[n] == kNone ? rootParent : decoded[tree.parent[n]];
-        const storage::NodeBox box =
-                boundsInside(toArray(nodes[n].boundsMin), toArray(nodes[n].boundsMax), parent);
+        storage::NodeV2 record;
         // The box lies inside its parent by construction: quantizing outward cannot fail.
-        decoded[n] = storage::quantizeBoundsOutward(box, parent).value();
+        decoded[n] = placeUnder(
+                             record,
+                             boxOf(nodes[n].boundsMin, nodes[n].boundsMax),
+                             boxOf(nodes[n].cellMin, nodes[n].cellMax),
+                             parent)
+                             .value();
     }
     return decoded;
 }
@@ -122,9 +131,33 @@ storage::NodeBox boundsInside(
     return box;
 }
 
-std::vector<storage::NodeBox>
-decodedBoxesV2(const std::vector<BuildNode>& nodes, const storage::NodeBox& rootParent) {
-    return decodedBoxes(nodes, breadthFirst(nodes), rootParent);
+DecodedNodeV2 rootParentV2(const storage::NodeBox& hierarchy) noexcept {
+    return {hierarchy, storage::rootParentCell(hierarchy)};
+}
+
+Result<DecodedNodeV2> placeUnder(
+        storage::NodeV2& record,
+        const storage::NodeBox& bounds,
+        const storage::NodeBox& cell,
+        const DecodedNodeV2& parent) {
+    record.bounds = boundsInside(bounds.min, bounds.max, parent.bounds);
+    record.flags = static_cast<std::uint8_t>(record.flags & ~storage::kNodeV2OctantCell);
+    record.octant = 0;
+    if (const std::optional<std::uint8_t> octant = storage::matchingOctant(cell, parent.cell)) {
+        record.flags = static_cast<std::uint8_t>(record.flags | storage::kNodeV2OctantCell);
+        record.octant = *octant;
+    }
+    DecodedNodeV2 decoded;
+    FF_ASSIGN_OR_RETURN(decoded.bounds, storage::quantizeBoundsOutward(record.bounds, parent.bounds));
+    storage::NodeV2 read = record;
+    read.bounds = decoded.bounds;
+    decoded.cell = storage::cellOfNode(read, parent.cell);
+    return decoded;
+}
+
+std::vector<DecodedNodeV2>
+decodedNodesV2(const std::vector<BuildNode>& nodes, const DecodedNodeV2& rootParent) {
+    return decodedNodes(nodes, breadthFirst(nodes), rootParent);
 }
 
 Status NodePageTable::writeOpen(storage::SceneWriter& writer) {
@@ -348,23 +381,27 @@ Result<SubtreeV2Result> writeSubtreeV2(
         return static_cast<std::uint32_t>(index);
     };
 
-    const std::vector<storage::NodeBox> decoded = decodedBoxes(nodes, tree, input.rootParent);
+    const std::vector<DecodedNodeV2> decoded = decodedNodes(nodes, tree, input.rootParent);
     for (std::size_t p = 0; p < pages.size(); ++p) {
         if (p > 0)
             FF_RETURN_IF_ERROR(table.writeOpen(writer));
         storage::NodePageV2Writer& page = table.open();
         for (const std::uint32_t n : pages[p]) {
             const BuildNode& node = nodes[n];
-            const storage::NodeBox& parentBox =
+            const DecodedNodeV2& parent =
                     tree.parent[n] == kNone ? input.rootParent : decoded[tree.parent[n]];
             storage::NodeV2 record;
-            record.bounds =
-                    boundsInside(toArray(node.boundsMin), toArray(node.boundsMax), parentBox);
             record.cube = quantizeCube(node.cube);
             record.subtreeTriangles = static_cast<float>(drawn[n]);
             record.kind =
                     isInstance(node) ? storage::NodeKindV2::Instance : storage::NodeKindV2::Cell;
             record.flags = storage::kNodeV2HasCube;
+            FF_RETURN_IF_ERROR(placeUnder(
+                                       record,
+                                       boxOf(node.boundsMin, node.boundsMax),
+                                       boxOf(node.cellMin, node.cellMax),
+                                       parent)
+                                       .status());
             if (!isInstance(node))
                 record.flags = static_cast<std::uint8_t>(record.flags | unlitFlag(drawn[n], unlit[n]));
             if (node.childCount > 0) {
@@ -382,7 +419,7 @@ Result<SubtreeV2Result> writeSubtreeV2(
                 record.firstRepresentation = node.instanceIndex;
             const auto own =
                     std::span(reps).subspan(firstRep[n], isInstance(node) ? 0 : repCount[n]);
-            FF_ASSIGN_OR_RETURN(const std::uint32_t slot, page.append(record, parentBox, own));
+            FF_ASSIGN_OR_RETURN(const std::uint32_t slot, page.append(record, parent.bounds, own));
             FF_ASSERT(slot == placement[n].slot);
             ++result.nodes;
             result.leafNodes += node.childCount > 0 ? 0 : 1;

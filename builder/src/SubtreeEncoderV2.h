@@ -68,14 +68,35 @@ inline std::uint8_t unlitFlag(double drawnTriangles, double unlitTriangles) noex
                    : std::uint8_t{0};
 }
 
+/** What a v2 record's children are read against: its decoded bounds and its cell
+ *  (storage/NodeCellV2.h). */
+struct DecodedNodeV2 {
+    storage::NodeBox bounds;
+    storage::NodeBox cell;
+};
+
+/** What the root of a hierarchy whose box is `hierarchy` is read against. */
+DecodedNodeV2 rootParentV2(const storage::NodeBox& hierarchy) noexcept;
+
+/**
+ * Gives `record` its bounds (`bounds` inside the parent's, boundsInside) and, where the node's
+ * cell `cell` is an octant of the parent's (storage::matchingOctant), that octant with
+ * kNodeV2OctantCell; returns what the node's children are read against, as a reader decodes it.
+ */
+[[nodiscard]] Result<DecodedNodeV2> placeUnder(
+        storage::NodeV2& record,
+        const storage::NodeBox& bounds,
+        const storage::NodeBox& cell,
+        const DecodedNodeV2& parent);
+
 /** What a v2 hierarchy is written against. */
 struct SubtreeV2Input {
     std::uint32_t prototype = 0; ///< whose cluster pages its geometry goes to
     /** The prototype's grid; null for a hierarchy without triangles (the instance level). */
     const storage::PositionGrid* grid = nullptr;
-    /** What the root's bounds are stored relative to: the prototype record's bounds, or the
-     *  header's for the instance level. Must hold the root's bounds. */
-    storage::NodeBox rootParent;
+    /** What the root is read against: rootParentV2 of the prototype record's bounds, or of the
+     *  header's for the instance level. Its bounds must hold the root's bounds. */
+    DecodedNodeV2 rootParent;
     /** Per instance index, the triangles an Instance node draws (its prototype's). */
     std::span<const std::uint64_t> instanceTriangles;
     /** Every node with placedChildren or placedTriangles, resolved. */
@@ -101,12 +122,13 @@ struct SubtreeV2Result {
 };
 
 /**
- * The bounds each reachable node of `nodes` decodes to in v2 (relative to its parent's decoded
- * bounds, the root's to `rootParent`), as writeSubtreeV2 stores them: what the records a chunk's
- * root has below it (written before it) are relative to. Nodes not reached are left empty.
+ * What each reachable node of `nodes` decodes to in v2 (bounds relative to its parent's decoded
+ * bounds, cell from its parent's cell; the root's against `rootParent`), as writeSubtreeV2
+ * stores them: what the records a chunk's root has below it (written before it) are read
+ * against. Nodes not reached are left empty.
  */
-std::vector<storage::NodeBox>
-decodedBoxesV2(const std::vector<BuildNode>& nodes, const storage::NodeBox& rootParent);
+std::vector<DecodedNodeV2>
+decodedNodesV2(const std::vector<BuildNode>& nodes, const DecodedNodeV2& rootParent);
 
 /** The node's bounds as a box inside `parent`, as a v2 record is given them (float noise of a
  *  recomputed union clamped; an empty node at the parent's min corner). */

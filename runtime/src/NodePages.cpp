@@ -2,6 +2,7 @@
 
 #include "CachedClusterPage.h"
 
+#include <ff/storage/NodeCellV2.h>
 #include <ff/storage/NodePageV2.h>
 
 #include <algorithm>
@@ -294,7 +295,8 @@ Fetch NodePages::readTop(
     if (fetch(ref.page, storage::PageType::Nodes, priority, payload) != Fetch::Ready)
         return Fetch::Missing;
     Result<storage::NodeRecord> node =
-            mV2 ? decodeV2(payload, ref, box, 0, subtreeTriangles) : mScene.decodeNode(payload, ref);
+            mV2 ? decodeV2(payload, ref, {box, storage::rootParentCell(box)}, 0, subtreeTriangles)
+                : mScene.decodeNode(payload, ref);
     if (!node) {
         reportFailure(node.status());
         return Fetch::Missing;
@@ -328,7 +330,7 @@ Result<storage::NodeRecord> NodePages::child(
     return decodeV2(
             childPage,
             ref,
-            {parent.boundsMin, parent.boundsMax},
+            {{parent.boundsMin, parent.boundsMax}, {parent.cellMin, parent.cellMax}},
             static_cast<std::uint8_t>(std::min(parent.level + 1, 255)),
             subtreeTriangles);
 }
@@ -336,16 +338,20 @@ Result<storage::NodeRecord> NodePages::child(
 Result<storage::NodeRecord> NodePages::decodeV2(
         std::span<const std::byte> payload,
         storage::NodeRef ref,
-        const storage::NodeBox& parent,
+        const ParentV2& parent,
         std::uint8_t level,
         float* subtreeTriangles) const {
     FF_ASSIGN_OR_RETURN(
-            const storage::NodeV2 node, storage::readNodeV2(payload, ref.page, ref.slot, parent));
+            const storage::NodeV2 node,
+            storage::readNodeV2(payload, ref.page, ref.slot, parent.bounds));
     if (subtreeTriangles)
         *subtreeTriangles = node.subtreeTriangles; // finite and not negative: readNodeV2
     storage::NodeRecord r{};
-    r.cellMin = r.boundsMin = node.bounds.min;
-    r.cellMax = r.boundsMax = node.bounds.max;
+    r.boundsMin = node.bounds.min;
+    r.boundsMax = node.bounds.max;
+    const storage::NodeBox cell = storage::cellOfNode(node, parent.cell);
+    r.cellMin = cell.min;
+    r.cellMax = cell.max;
     r.cube = node.cube;
     r.childCount = node.childCount;
     r.level = level;

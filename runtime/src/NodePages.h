@@ -269,10 +269,16 @@ private:
             float priority,
             storage::NodeRecord& out,
             float* subtreeTriangles = nullptr);
+    /** What a format 2 record is read against: its parent's decoded bounds and cell (a
+     *  root's: its hierarchy's box, storage::rootParentCell of it). */
+    struct ParentV2 {
+        storage::NodeBox bounds;
+        storage::NodeBox cell;
+    };
     [[nodiscard]] Result<storage::NodeRecord> decodeV2(
             std::span<const std::byte> payload,
             storage::NodeRef ref,
-            const storage::NodeBox& parent,
+            const ParentV2& parent,
             std::uint8_t level,
             float* subtreeTriangles) const;
     /** A format 2 cell's representations into mRepresentations (its own page fetched). */

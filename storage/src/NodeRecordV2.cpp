@@ -13,7 +13,7 @@ namespace {
 // The record's layout (FORMAT.md §5.3).
 struct PackedNodeV2 {
     std::array<std::array<std::uint8_t, 4>, 6> cube; // 0
-    std::uint64_t bounds;                            // 24: 6 x 10 bits, min xyz then max xyz
+    std::uint64_t bounds;                            // 24: 6 x 10 bits, min xyz then max xyz; octant
     std::uint32_t firstChild;                        // 32
     float subtreeTriangles;                          // 36
     std::uint32_t firstRepresentation;               // 40
@@ -24,6 +24,8 @@ struct PackedNodeV2 {
 };
 static_assert(sizeof(PackedNodeV2) == kNodeRecordV2Size);
 static_assert(offsetof(PackedNodeV2, bounds) == 24 && offsetof(PackedNodeV2, firstChild) == 32);
+/** Bits 60-62 of `bounds`: the node's octant of its parent's cell (kNodeV2OctantCell). */
+constexpr unsigned kOctantShift = 60;
 
 struct PackedRepresentation {
     std::uint8_t kind;
@@ -114,6 +116,8 @@ Status encodeNodeV2(const NodeV2& node, const NodeBox& parent, std::span<std::by
         return Status(ErrorCode::InvalidArgument, "node bounds must be finite, ordered boxes");
     if ((node.flags & ~kKnownNodeV2Flags) != 0 || node.kind > NodeKindV2::Instance)
         return Status(ErrorCode::InvalidArgument, "unknown node kind or flags");
+    if (node.octant > 7 || (node.octant != 0 && (node.flags & kNodeV2OctantCell) == 0))
+        return Status(ErrorCode::InvalidArgument, "an octant is 0-7, and 0 on a node without an octant cell");
     if (!std::isfinite(node.subtreeTriangles) || node.subtreeTriangles < 0.0f)
         return Status(ErrorCode::InvalidArgument, "subtree triangles must be a finite count");
     PackedNodeV2 p{};
@@ -125,6 +129,7 @@ Status encodeNodeV2(const NodeV2& node, const NodeBox& parent, std::span<std::by
         const std::uint64_t hi = stepAbove(parent.min[a], parent.max[a], node.bounds.max[a]);
         p.bounds |= lo << (10 * a) | hi << (10 * (a + 3));
     }
+    p.bounds |= std::uint64_t{node.octant} << kOctantShift;
     p.firstChild = node.firstChild;
     p.subtreeTriangles = node.subtreeTriangles;
     p.firstRepresentation = node.firstRepresentation;
@@ -148,8 +153,11 @@ Result<NodeV2> decodeNodeV2(std::span<const std::byte> bytes, const NodeBox& par
         return corrupt("unknown kind " + std::to_string(p.kind));
     if ((p.flags & ~kKnownNodeV2Flags) != 0)
         return corrupt("unknown flags " + std::to_string(p.flags));
-    if ((p.bounds >> 60) != 0)
-        return corrupt("reserved bound bits set");
+    if ((p.bounds >> 63) != 0)
+        return corrupt("reserved bound bit set");
+    const auto octant = static_cast<std::uint8_t>(p.bounds >> kOctantShift & 7u);
+    if (octant != 0 && (p.flags & kNodeV2OctantCell) == 0)
+        return corrupt("an octant on a node without an octant cell");
     if (!std::isfinite(p.subtreeTriangles) || p.subtreeTriangles < 0.0f)
         return corrupt("subtree triangle count is not a finite count");
     NodeV2 node;
@@ -169,6 +177,7 @@ Result<NodeV2> decodeNodeV2(std::span<const std::byte> bytes, const NodeBox& par
     node.representationCount = p.representationCount;
     node.kind = static_cast<NodeKindV2>(p.kind);
     node.flags = p.flags;
+    node.octant = octant;
     return node;
 }
 

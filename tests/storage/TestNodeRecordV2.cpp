@@ -80,10 +80,13 @@ TEST(NodeRecordV2Test, EveryOtherFieldRoundTrips) {
     const NodeBox parent{{0, 0, 0}, {1, 1, 1}};
     NodeV2 n = sampleNode({{0.25f, 0.5f, 0.0f}, {0.75f, 0.5f, 1.0f}});
     n.kind = NodeKindV2::Instance;
+    n.flags = static_cast<std::uint8_t>(n.flags | kNodeV2OctantCell);
+    n.octant = 5;
     std::array<std::byte, kNodeRecordV2Size> bytes{};
     ASSERT_TRUE(encodeNodeV2(n, parent, bytes).isOk());
     const auto d = decodeNodeV2(bytes, parent);
     ASSERT_TRUE(d.isOk());
+    EXPECT_EQ(d->octant, 5);
     EXPECT_EQ(d->cube, n.cube);
     EXPECT_EQ(d->firstChild, n.firstChild);
     EXPECT_EQ(d->subtreeTriangles, n.subtreeTriangles);
@@ -105,11 +108,37 @@ TEST(NodeRecordV2Test, TheEncoderRefusesWhatCannotBeStoredConservatively) {
     NodeV2 badFlags = sampleNode(parent);
     badFlags.flags = 0x80;
     EXPECT_FALSE(encodeNodeV2(badFlags, parent, bytes).isOk());
+    NodeV2 octantWithoutFlag = sampleNode(parent);
+    octantWithoutFlag.octant = 3;
+    EXPECT_FALSE(encodeNodeV2(octantWithoutFlag, parent, bytes).isOk());
+    NodeV2 ninthOctant = sampleNode(parent);
+    ninthOctant.flags = static_cast<std::uint8_t>(ninthOctant.flags | kNodeV2OctantCell);
+    ninthOctant.octant = 8;
+    EXPECT_FALSE(encodeNodeV2(ninthOctant, parent, bytes).isOk());
     NodeV2 badCount = sampleNode(parent);
     badCount.subtreeTriangles = INFINITY;
     EXPECT_FALSE(encodeNodeV2(badCount, parent, bytes).isOk());
     std::array<std::byte, 47> small{};
     EXPECT_FALSE(encodeNodeV2(sampleNode(parent), parent, small).isOk());
+}
+
+// A record's octant means something only with kNodeV2OctantCell: a reader refuses one without
+// the flag, and the last bit of the bounds word, which nothing uses.
+TEST(NodeRecordV2Test, TheReaderRefusesAnOctantWithoutItsFlagAndTheReservedBit) {
+    const NodeBox parent{{0, 0, 0}, {1, 1, 1}};
+    NodeV2 n = sampleNode({{0.5f, 0.5f, 0.5f}, {1, 1, 1}});
+    n.flags = static_cast<std::uint8_t>(n.flags | kNodeV2OctantCell);
+    n.octant = 7;
+    std::array<std::byte, kNodeRecordV2Size> bytes{};
+    ASSERT_TRUE(encodeNodeV2(n, parent, bytes).isOk());
+    ASSERT_TRUE(decodeNodeV2(bytes, parent).isOk());
+    auto withoutFlag = bytes;
+    withoutFlag[47] = static_cast<std::byte>(
+            std::to_integer<std::uint8_t>(withoutFlag[47]) & ~kNodeV2OctantCell);
+    EXPECT_FALSE(decodeNodeV2(withoutFlag, parent).isOk());
+    auto reservedBit = bytes;
+    reservedBit[31] |= std::byte{0x80}; // bit 63 of the little-endian bounds word at 24
+    EXPECT_FALSE(decodeNodeV2(reservedBit, parent).isOk());
 }
 
 // Every reader is memory-safe: every truncation is refused, and random bytes decode either to

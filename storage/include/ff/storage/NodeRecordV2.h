@@ -40,9 +40,12 @@ enum NodeFlagsV2 : std::uint8_t {
     kNodeV2HasCube = 1u << 0,        ///< `cube` holds a baked color cube
     kNodeV2OctreeChildren = 1u << 1, ///< children are octants of this node's box
     kNodeV2Unlit = 1u << 2,          ///< drawn with its colours as they are (KHR_materials_unlit)
+    /** Its cell (the box its cube was baked over and the ε rule measures) is octant `octant` of
+     *  its parent's cell (cellOfNode); without it the cell is its bounds. */
+    kNodeV2OctantCell = 1u << 3,
 };
 inline constexpr std::uint8_t kKnownNodeV2Flags =
-        kNodeV2HasCube | kNodeV2OctreeChildren | kNodeV2Unlit;
+        kNodeV2HasCube | kNodeV2OctreeChildren | kNodeV2Unlit | kNodeV2OctantCell;
 
 /** A node as the runtime sees it, its bounds decoded. */
 struct NodeV2 {
@@ -58,7 +61,8 @@ struct NodeV2 {
     std::uint8_t childCount = 0;
     std::uint8_t representationCount = 0;
     NodeKindV2 kind = NodeKindV2::Cell;
-    std::uint8_t flags = 0; ///< NodeFlagsV2
+    std::uint8_t flags = 0;  ///< NodeFlagsV2
+    std::uint8_t octant = 0; ///< with kNodeV2OctantCell: bit 0 x, bit 1 y, bit 2 z high; else 0
 };
 
 /** What a payload holds. New kinds are added here, not by a new format. */
