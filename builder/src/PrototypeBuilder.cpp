@@ -26,11 +26,11 @@ StandInKinds standInKinds(const HierarchyParams& params) {
     return {params.standIns, params.splatSpacing, params.measureStandIns};
 }
 
-LeafShapeV2 leafShapeV2(const HierarchyParams& params, const storage::PositionGrid& grid, unsigned threads) {
+LeafShapeV2 leafShapeV2(const HierarchyParams& params, const PrototypeEncodingV2& encoding, unsigned threads) {
     LeafShapeV2 shape;
-    shape.leafTriangles = params.leafTriangles();
+    shape.leafTriangles = encoding.leafTriangles;
     shape.clusterNodes = params.clusterNodes;
-    shape.grid = &grid;
+    shape.grid = &encoding.grid;
     shape.bakeResolution = params.bakeResolution;
     shape.threads = threads;
     return shape;
@@ -97,7 +97,7 @@ BuiltHierarchy buildInMemoryHierarchy(
     return out;
 }
 
-// Builds one chunk and lays it out level by level; format 2 (`positionGrid` set) makes its small
+// Builds one chunk and lays it out level by level; format 2 (`encoding` set) makes its small
 // subtrees leaves first and encodes its clusters. Runs on worker threads.
 Result<ChunkOutput> buildChunk(
         std::vector<storage::PackedTriangle> triangles,
@@ -106,14 +106,15 @@ Result<ChunkOutput> buildChunk(
         int octant,
         const HierarchyParams& params,
         const VoxelGrid* grid,
-        const storage::PositionGrid* positionGrid,
+        const std::optional<PrototypeEncodingV2>& encoding,
         std::uint32_t pageSize) {
     BuiltHierarchy built = buildInMemoryHierarchy(triangles, cell, level, octant, params, grid);
     ChunkOutput out;
     out.summary = std::move(built.summary);
     out.leafNodes = built.leafNodes;
-    if (positionGrid != nullptr)
-        FF_RETURN_IF_ERROR(shapeLeavesV2(built.nodes, triangles, leafShapeV2(params, *positionGrid, 1)));
+    const storage::PositionGrid* positionGrid = encoding ? &encoding->grid : nullptr;
+    if (encoding)
+        FF_RETURN_IF_ERROR(shapeLeavesV2(built.nodes, triangles, leafShapeV2(params, *encoding, 1)));
     std::vector<std::optional<StandIn>> standIns;
     StandInSource rootSource = StandInSource::unusable();
     if (positionGrid != nullptr && params.anyStandIns()) {
@@ -248,7 +249,7 @@ Result<PrototypeBuildResult> PrototypeBuilder::writeInMemoryV2(
     input.rootParent = rootParentV2({{boundsMin.x, boundsMin.y, boundsMin.z}, {boundsMax.x, boundsMax.y, boundsMax.z}});
     input.threads = mThreads;
     input.standIns = standInKinds(mParams);
-    FF_RETURN_IF_ERROR(shapeLeavesV2(built.nodes, all, leafShapeV2(mParams, encoding.grid, mThreads)));
+    FF_RETURN_IF_ERROR(shapeLeavesV2(built.nodes, all, leafShapeV2(mParams, encoding, mThreads)));
     PrototypeBuildResult result;
     result.summary = std::move(built.summary);
     FF_ASSIGN_OR_RETURN(
@@ -286,7 +287,7 @@ Result<PrototypeBuildResult> PrototypeBuilder::finishChunkedV2(
     // The records below the chunk roots are stored relative to the roots' decoded bounds, so
     // the tree above the chunks is settled (its small subtrees made leaves) before they are
     // written, and written after them (it names where their children went).
-    FF_RETURN_IF_ERROR(shapeLeavesV2(nodes, ownTriangles, leafShapeV2(mParams, encoding.grid, mThreads)));
+    FF_RETURN_IF_ERROR(shapeLeavesV2(nodes, ownTriangles, leafShapeV2(mParams, encoding, mThreads)));
     const glm::vec3 boundsMin = nodes[0].boundsMin;
     const glm::vec3 boundsMax = nodes[0].boundsMax;
     const DecodedNodeV2 rootParent =
@@ -492,7 +493,8 @@ Result<PrototypeBuildResult> PrototypeBuilder::buildChunked(
     std::optional<LevelRegionsV2> levelsV2;
     if (encoding != nullptr)
         levelsV2.emplace(mWriter, *mNodePageTable, mTempDirectory, mSpillCodec, prefix, encoding->storedIndex);
-    const storage::PositionGrid* positionGrid = encoding != nullptr ? &encoding->grid : nullptr;
+    const std::optional<PrototypeEncodingV2> chunkEncoding =
+            encoding != nullptr ? std::optional(*encoding) : std::nullopt;
     std::vector<BuildNode> chunkRoots(chunkNodes.size()); // for the top tree
     for (std::size_t begin = 0; begin < chunkNodes.size(); begin += mThreads) {
         const std::size_t end = std::min<std::size_t>(begin + mThreads, chunkNodes.size());
@@ -504,11 +506,11 @@ Result<PrototypeBuildResult> PrototypeBuilder::buildChunked(
             const int level = node.level;
             const int octant = node.octant;
             const HierarchyParams params = mParams;
-            running.push_back(std::async(std::launch::async, [file, cell, level, octant, params, grid = mGrid, positionGrid, pageSize = mWriter.pageSize()]() -> Result<ChunkOutput> {
+            running.push_back(std::async(std::launch::async, [file, cell, level, octant, params, grid = mGrid, chunkEncoding, pageSize = mWriter.pageSize()]() -> Result<ChunkOutput> {
                 FF_ASSIGN_OR_RETURN(std::vector<storage::PackedTriangle> chunkTriangles, file->readAll());
                 file->remove();
                 return buildChunk(
-                        std::move(chunkTriangles), cell, level, octant, params, grid, positionGrid, pageSize);
+                        std::move(chunkTriangles), cell, level, octant, params, grid, chunkEncoding, pageSize);
             }));
         }
         for (std::size_t c = begin; c < end; ++c) {

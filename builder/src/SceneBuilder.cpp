@@ -290,6 +290,9 @@ Result<BuildReport> SceneBuilder::finish() {
     std::vector<storage::PrototypeV2> protoRecordsV2; // v2: what the Prototypes section holds
     std::vector<PrototypeSummary> summaries;
     nlohmann::json names = nlohmann::json::array(); // per stored prototype
+    std::vector<std::uint64_t> placements(s.prototypes.size(), 0); // each prototype's instances
+    for (const auto& instance : s.instances)
+        ++placements[instance.first];
     for (std::size_t p = 0; p < s.prototypes.size(); ++p) {
         s.progress("hierarchy", p, s.prototypes.size());
         PrototypeState& proto = *s.prototypes[p];
@@ -307,7 +310,13 @@ Result<BuildReport> SceneBuilder::finish() {
                     chooseGrid({proto.boundsMin.x, proto.boundsMin.y, proto.boundsMin.z},
                                {proto.boundsMax.x, proto.boundsMax.y, proto.boundsMax.z},
                                proto.edges));
-            encoding = PrototypeEncodingV2{positionGrid, static_cast<std::uint32_t>(protoRecords.size())};
+            encoding = PrototypeEncodingV2{
+                    positionGrid,
+                    static_cast<std::uint32_t>(protoRecords.size()),
+                    s.options.hierarchy.leafTriangles(placements[p])};
+            report.smallestClusterLeafTriangles = report.smallestClusterLeafTriangles == 0
+                    ? encoding->leafTriangles
+                    : std::min(report.smallestClusterLeafTriangles, encoding->leafTriangles);
             report.maxGridBits = std::max<std::uint32_t>(report.maxGridBits, static_cast<std::uint32_t>(positionGrid.bits));
         }
         FF_ASSIGN_OR_RETURN(
@@ -498,6 +507,7 @@ std::string buildReportJson(const BuildReport& r) {
             {"instances", r.instances},
             {"decomposition", r.decomposition},
             {"cluster_leaf_triangles", r.clusterLeafTriangles},
+            {"smallest_cluster_leaf_triangles", r.smallestClusterLeafTriangles},
             {"cluster_nodes", r.clusterNodes},
             {"stand_ins",
              {{"enabled", r.standIns},

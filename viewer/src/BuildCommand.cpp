@@ -225,7 +225,8 @@ CommandRunner addBuildCommand(CLI::App& app) {
             ->capture_default_str();
     cmd->add_option("--cluster-leaf-triangles", args->clusterLeafTriangles,
                     "--format 2: subtrees of at most this many triangles become one leaf of whole clusters (0: keep the "
-                    "leaves); default 4096, 65536 with --cluster-nodes");
+                    "leaves); default 4096, 65536 with --cluster-nodes, and 16 in a prototype placed more than once "
+                    "(its whole leaves are drawn in every placement in view)");
     cmd->add_flag("--cluster-nodes", args->clusterNodes,
                   "--format 2: give each leaf a tree of nodes down to pieces of about a cluster, each with its own bounds "
                   "and cube, so the cut can stop inside a leaf: far views draw far fewer triangles, for 0.6-1 byte a "

@@ -50,6 +50,10 @@ inline constexpr std::uint64_t kClusterLeafTriangles = 4096;
  *  cut the surface instead (docs/results, "Cluster nodes from larger leaves": the 10^9 terrain
  *  filling the screen from above 50.2 MB instead of 85.4). */
 inline constexpr std::uint64_t kClusterNodesLeafTriangles = 65536;
+/** The leaf the default gives a prototype placed more than once: about the octree's own leaves
+ *  (its cube-cost rule leaves ~12 triangles), so the cut of an instanced tree stops where
+ *  format 1's does (docs/results, "Format 2 paged"). */
+inline constexpr std::uint64_t kInstancedLeafTriangles = 16;
 
 /** How the builder subdivides and bakes. The defaults are the ones the benchmarks chose. */
 struct HierarchyParams {
@@ -73,8 +77,8 @@ struct HierarchyParams {
     /** Format 2 only: a subtree of at most this many triangles is written as one leaf of whole
      *  clusters, so a node's 48-byte record is spread over many triangles (the v2 estimate of
      *  docs/results "Compact geometry" was measured at 4096). 0 keeps the hierarchy's leaves.
-     *  Unset: kClusterLeafTriangles, or kClusterNodesLeafTriangles with clusterNodes
-     *  (leafTriangles()). */
+     *  Unset: kClusterLeafTriangles, or kClusterNodesLeafTriangles with clusterNodes, for a
+     *  prototype placed once; kInstancedLeafTriangles for one placed more (leafTriangles()). */
     std::optional<std::uint64_t> clusterLeafTriangles;
     /** Format 2 only: each leaf gets a tree of nodes, at most four wide, down to pieces of
      *  about a cluster, each with its bounds and cube, so a cut can stop inside a leaf
@@ -97,10 +101,23 @@ struct HierarchyParams {
     bool measureStandIns = true;
     /** Whether cells get stand-ins of either kind. */
     [[nodiscard]] bool anyStandIns() const noexcept { return standIns || splatSpacing > 0; }
-    /** clusterLeafTriangles, or its default for clusterNodes. */
-    [[nodiscard]] std::uint64_t leafTriangles() const noexcept {
-        return clusterLeafTriangles.value_or(
-                clusterNodes ? kClusterNodesLeafTriangles : kClusterLeafTriangles);
+    /**
+     * The leaf size of a prototype placed `placements` times: clusterLeafTriangles where set;
+     * else, placed more than once, kInstancedLeafTriangles, and placed once, its default for
+     * clusterNodes. Where a leaf's cell covers more than ε pixels all its triangles are drawn,
+     * in every placement in view, while its records are stored once for all of them: at the
+     * forest's view a tree placed 16,384 times with leaves of 4,096 triangles drew 42 times
+     * format 1's triangles, and 16 trees with leaves of 256 (the default shared among the
+     * placements, tried) still 16 times (docs/results, "Format 2 paged"). A prototype placed
+     * once (a terrain, a scan) keeps the large leaves that hold it to 8 bytes a triangle; its
+     * far views are what stand-ins are for.
+     */
+    [[nodiscard]] std::uint64_t leafTriangles(std::uint64_t placements = 1) const noexcept {
+        if (clusterLeafTriangles)
+            return *clusterLeafTriangles;
+        if (placements > 1)
+            return kInstancedLeafTriangles;
+        return clusterNodes ? kClusterNodesLeafTriangles : kClusterLeafTriangles;
     }
 };
 
