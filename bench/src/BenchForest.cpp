@@ -2,6 +2,7 @@
 // trees, rendered from one fixed viewpoint; frame time against scene size on log-log axes.
 
 #include "BenchSupport.h"
+#include "ScenarioParts.h"
 
 #include <ff/bench/Benchmarks.h>
 #include <ff/runtime/OffscreenContext.h>
@@ -28,6 +29,8 @@ struct ForestParams {
     /** Also draw each forest with occlusion culling (the default backend): its frame time and
      *  speedup in columns of their own. */
     bool occlusion = false;
+    /** Flags every build gets ("build": ["--format", "2"]). */
+    std::vector<std::string> buildFlags;
 };
 
 Status runForest(const ForestParams& p, const Scenario& scenario, const BenchOptions& options) {
@@ -56,7 +59,9 @@ Status runForest(const ForestParams& p, const Scenario& scenario, const BenchOpt
     for (const std::int64_t trees : p.trees) {
         std::fprintf(stderr, "%s: %lld trees\n", scenario.name.c_str(), static_cast<long long>(trees));
         const std::filesystem::path scene = work / ("forest-" + std::to_string(trees) + ".ffs");
-        FF_RETURN_IF_ERROR(buildGenerated("forest:trees=" + std::to_string(trees), scene));
+        FF_RETURN_IF_ERROR(
+                buildScene({"", "forest:trees=" + std::to_string(trees), p.buildFlags}, {}, scene, options.selfExe)
+                        .status());
         FF_ASSIGN_OR_RETURN(auto session, runtime::StreamingSession::open(scene));
         const storage::SceneIndex* file = &session->scene();
         const std::uint64_t triangles = file->header().instancedTriangles;
@@ -113,6 +118,7 @@ Status runForest(const ForestParams& p, const Scenario& scenario, const BenchOpt
        << "Full (brute force) frames are measured up to " << p.fullMeasuredLimit / 1'000'000
        << " M triangles and extrapolated above that from the measured per-triangle cost (full_measured = 0). "
        << "Chamberlain et al. report an 88x speedup at 16,384 trees (859 M polygons)."
+       << buildFlagsNote(p.buildFlags)
        << (p.occlusion ? " occlusion_*: the same frames with occlusion culling on (docs/methods.md §9), "
                          "timed like the hierarchical ones; the speedup is over the same full frame."
                        : "")
@@ -131,6 +137,7 @@ Result<BenchRun> prepareForest(const Scenario& scenario) {
     p.fullMeasuredLimit = reader.integer("full_measured_limit", p.fullMeasuredLimit);
     p.trees = reader.ladder("trees", p.trees);
     p.occlusion = reader.boolean("occlusion", p.occlusion);
+    p.buildFlags = readBuildFlags(reader);
     if (!(p.eps >= 0.0f))
         reader.fail("eps", "must be >= 0 pixels");
     if (p.fullMeasuredLimit < 0)

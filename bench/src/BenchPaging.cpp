@@ -36,16 +36,6 @@ struct PagingParams {
     std::vector<std::string> buildFlags;
 };
 
-/** " Every scene is built with `FLAGS`." (nothing without flags). */
-std::string buildFlagsNote(const std::vector<std::string>& flags) {
-    if (flags.empty())
-        return "";
-    std::string joined;
-    for (const std::string& flag : flags)
-        joined += (joined.empty() ? "" : " ") + flag;
-    return " Every scene is built with `" + joined + "`.";
-}
-
 /** `farfield build -q --generate SPEC` with the scenario's flags, then `extra`. */
 std::vector<std::string> buildArgs(const PagingParams& p, const std::string& ff, const std::string& spec,
                                    std::initializer_list<std::string> extra) {
@@ -159,7 +149,7 @@ Result<BenchRun> preparePaging(const Scenario& scenario) {
     p.teleports = tp.integer("jumps", p.teleports);
     p.teleportSeed = tp.integer("seed", p.teleportSeed);
     p.teleportCacheMb = tp.integer("cache_mb", p.teleportCacheMb);
-    p.buildFlags = reader.strings("build", {});
+    p.buildFlags = readBuildFlags(reader);
     if (p.workingSetCacheMb < 1)
         ws.fail("cache_mb", "must be >= 1");
     if (p.teleportTriangles < 1 || p.teleportCacheMb < 1 || p.teleportSeed < 0)

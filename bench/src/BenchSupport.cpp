@@ -1,8 +1,6 @@
 #include "BenchSupport.h"
 
 #include <ff/bench/Benchmarks.h>
-#include <ff/builder/Generators.h>
-#include <ff/builder/SceneBuilder.h>
 
 #include <sys/resource.h>
 #include <sys/wait.h>
@@ -153,15 +151,6 @@ Result<ChildRun> runChild(const std::vector<std::string>& argv) {
         return Status(ErrorCode::Internal, "failed (" + how + "): " + command);
     }
     return run;
-}
-
-Status buildGenerated(const std::string& spec, const std::filesystem::path& path) {
-    builder::BuildOptions options;
-    options.memoryBudgetBytes = 2ull << 30;
-    FF_ASSIGN_OR_RETURN(auto sceneBuilder, builder::SceneBuilder::create(path, options));
-    FF_ASSIGN_OR_RETURN(const builder::GeneratorSpec parsed, builder::parseGeneratorSpec(spec));
-    FF_RETURN_IF_ERROR(builder::runGenerator(parsed, *sceneBuilder).status());
-    return sceneBuilder->finish().status();
 }
 
 Status plotCharts(const std::string& kind, const std::filesystem::path& csv, const std::filesystem::path& outDir) {

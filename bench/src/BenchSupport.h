@@ -81,9 +81,6 @@ struct ChildRun {
 /** Runs argv (argv[0] an executable path, no shell) to completion; non-zero exit is an error. */
 [[nodiscard]] Result<ChildRun> runChild(const std::vector<std::string>& argv);
 
-/** Builds a generator's scene (e.g. "forest:trees=16") into `path` with a 2 GiB budget. */
-[[nodiscard]] Status buildGenerated(const std::string& spec, const std::filesystem::path& path);
-
 /** Runs scripts/plot_bench.py KIND CSV OUTDIR with Debian's matplotlib; a missing script or
  *  interpreter is an error naming what is missing. */
 [[nodiscard]] Status plotCharts(const std::string& kind, const std::filesystem::path& csv, const std::filesystem::path& outDir);

@@ -28,6 +28,8 @@ struct Table2Params {
     float fov = 45.0f;
     float eps = 1.0f;
     int supersample = 4;
+    /** Flags the build gets ("build": ["--format", "2"]). */
+    std::vector<std::string> buildFlags;
 };
 
 Status runTable2(const Table2Params& p, const Scenario& scenario, const BenchOptions& options) {
@@ -35,7 +37,7 @@ Status runTable2(const Table2Params& p, const Scenario& scenario, const BenchOpt
     const std::filesystem::path& work = scenarioRun.work();
     const std::filesystem::path scene = work / "tree.ffs";
     std::fprintf(stderr, "%s: building %s\n", scenario.name.c_str(), p.generate.c_str());
-    FF_RETURN_IF_ERROR(buildGenerated(p.generate, scene));
+    FF_RETURN_IF_ERROR(buildScene({"", p.generate, p.buildFlags}, {}, scene, options.selfExe).status());
     FF_ASSIGN_OR_RETURN(auto context, runtime::OffscreenContext::create());
     FF_ASSIGN_OR_RETURN(auto session, runtime::StreamingSession::open(scene));
     const storage::SceneIndex* file = &session->scene();
@@ -95,7 +97,7 @@ Status runTable2(const Table2Params& p, const Scenario& scenario, const BenchOpt
        << "epsilon = " << p.eps << " pixel. "
        << "Times are the median of " << options.timedFrames << " frames (selection + drawing until glFinish) on "
        << "llvmpipe; PSNR/SSIM against the same view with all geometry, " << p.supersample << "x" << p.supersample
-       << " supersampled.\n\n"
+       << " supersampled." << buildFlagsNote(p.buildFlags) << "\n\n"
        << table.markdown() << "\n![speed against accuracy](" << scenario.name << ".png)\n";
     return scenarioRun.finish("table2", csv, md.str());
 }
@@ -113,6 +115,7 @@ Result<BenchRun> prepareTable2(const Scenario& scenario) {
     p.fov = static_cast<float>(reader.number("fov", p.fov));
     p.eps = static_cast<float>(reader.number("eps", p.eps));
     p.supersample = readReferenceSupersample(reader, p.supersample);
+    p.buildFlags = readBuildFlags(reader);
     for (const double d : p.distances)
         if (!(d > 0.0))
             reader.fail("distances", "must be positive (scene radii)");

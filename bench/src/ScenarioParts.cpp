@@ -23,13 +23,28 @@ SceneSpec readSceneSpec(ScenarioReader& reader) {
         spec.gltf = *expanded;
     else
         scene.fail("gltf", expanded.status().message());
+    spec.buildFlags = readBuildFlags(reader);
+    return spec;
+}
+
+std::vector<std::string> readBuildFlags(ScenarioReader& reader) {
+    std::vector<std::string> flags;
     for (const std::string& flag : reader.strings("build", {})) {
         if (auto expanded = expandShared(flag))
-            spec.buildFlags.push_back(*expanded);
+            flags.push_back(*expanded);
         else
             reader.fail("build", expanded.status().message());
     }
-    return spec;
+    return flags;
+}
+
+std::string buildFlagsNote(const std::vector<std::string>& flags) {
+    if (flags.empty())
+        return "";
+    std::string joined;
+    for (const std::string& flag : flags)
+        joined += (joined.empty() ? "" : " ") + flag;
+    return " Every scene is built with `" + joined + "`.";
 }
 
 Result<ChildRun> buildScene(

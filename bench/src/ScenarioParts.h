@@ -29,6 +29,12 @@ struct SceneSpec {
 /** Reads "scene" and "build"; errors go to the reader. */
 SceneSpec readSceneSpec(ScenarioReader& reader);
 
+/** Reads "build" alone (flags every build of a generated ladder gets), ${shared} expanded. */
+std::vector<std::string> readBuildFlags(ScenarioReader& reader);
+
+/** " Every scene is built with `FLAGS`." for a report (nothing without flags). */
+std::string buildFlagsNote(const std::vector<std::string>& flags);
+
 /** Builds the scene into `output` with a child `farfield build -q` (so every flag means what
  *  it means on the command line), with `extraFlags` after the scenario's own; returns the
  *  child's time and peak RSS. */

@@ -383,6 +383,33 @@ TEST(BenchCommandTest, CodecScenarioEncodesTheLeavesOfABuildAndDecodesThemAgain)
     EXPECT_NE(readText(out / "tiny-codec.md").find("| terrain |"), std::string::npos);
 }
 
+// "build" gives every forest of the ladder its flags: format 2's files are smaller, and an
+// instanced tree's cut is format 1's (leaves of 16 triangles; docs/results, "Format 2 paged").
+TEST(BenchCommandTest, ForestScenarioBuildsEveryForestWithItsFlags) {
+    const fs::path dir = freshTestDir();
+    const std::string forest = R"("kind": "forest", "trees": [1, 16], "sizes": [[64, 48]])";
+    writeText(dir / "tiny-forest.json", "{\"name\": \"tiny-forest\", " + forest + "}");
+    writeText(dir / "tiny-forest-v2.json",
+              "{\"name\": \"tiny-forest-v2\", " + forest + R"(, "build": ["--format", "2"]})");
+    const fs::path out = dir / "out";
+    const ProcessResult r = runFarfield(
+            {"bench", (dir / "tiny-forest.json").string(), (dir / "tiny-forest-v2.json").string(),
+             "--out", out.string(), "--frames", "1"},
+            dir);
+    ASSERT_EQ(r.exitCode, 0) << r.describe();
+    const std::vector<Row> one = readCsv(out / "tiny-forest.csv");
+    const std::vector<Row> two = readCsv(out / "tiny-forest-v2.csv");
+    ASSERT_EQ(one.size(), 3u);
+    ASSERT_EQ(two.size(), 3u);
+    for (std::size_t i = 1; i < one.size(); ++i) {
+        EXPECT_LT(std::stoull(cell(two, i, "file_bytes")), std::stoull(cell(one, i, "file_bytes")));
+        EXPECT_EQ(cell(two, i, "triangles"), cell(one, i, "triangles"));
+    }
+    EXPECT_LE(std::stod(cell(two, 2, "triangles_drawn")), 1.25 * std::stod(cell(one, 2, "triangles_drawn")));
+    EXPECT_NE(readText(out / "tiny-forest-v2.md").find("built with `--format 2`"), std::string::npos);
+    EXPECT_EQ(readText(out / "tiny-forest.md").find("built with"), std::string::npos);
+}
+
 constexpr const char* kReplayScenario = R"({
   "name": "tiny-replay",
   "title": "A tiny replay scenario",
