@@ -295,7 +295,7 @@ Result<InstanceLevelResult> buildInstanceLevel(
         for (std::size_t i = 0; i < instances.size(); ++i)
             drawn[i] = prototypes[instances[i].prototype].triangleCount;
         SubtreeV2Input input;
-        input.rootParent = rootParentV2({{result.boundsMin.x, result.boundsMin.y, result.boundsMin.z},
+        input.rootParent = storage::rootParentV2({{result.boundsMin.x, result.boundsMin.y, result.boundsMin.z},
                                          {result.boundsMax.x, result.boundsMax.y, result.boundsMax.z}});
         input.instanceTriangles = drawn;
         FF_ASSIGN_OR_RETURN(const SubtreeV2Result written, writeSubtreeV2(writer, *nodePageTable, std::move(nodes), {}, input));

@@ -111,7 +111,7 @@ struct LevelRegionsV2::Region {
     // Set by finish():
     std::vector<std::uint32_t> pageStart;      ///< position of each page's first record
     std::uint64_t firstOrdinal = 0;            ///< of its first node page in the NodePages table
-    std::vector<DecodedNodeV2> parents; ///< per position, what the record is read against
+    std::vector<storage::DecodedNodeV2> parents; ///< per position, what the record is read against
 };
 
 LevelRegionsV2::LevelRegionsV2(
@@ -295,7 +295,7 @@ Status LevelRegionsV2::append(LevelledSubtree& chunk, ChunkClustersV2& clusters)
 }
 
 Status LevelRegionsV2::finish(
-        std::span<const DecodedNodeV2> rootBoxes,
+        std::span<const storage::DecodedNodeV2> rootBoxes,
         const std::function<void(std::uint64_t done, std::uint64_t total)>& pagesWritten) {
     if (rootBoxes.size() != mRoots.size())
         return Status(ErrorCode::Internal, "a decoded box per chunk root is needed");
@@ -374,13 +374,13 @@ Status LevelRegionsV2::writeRegion(std::size_t level, const std::function<void()
                     storage::NodePageV2Writer& out = mTable.open();
                     for (std::uint32_t i = 0; i < r.pageFill[page]; ++i, ++position) {
                         const PendingNodeV2& p = pending[used + i];
-                        const DecodedNodeV2& parent = r.parents.at(position);
+                        const storage::DecodedNodeV2& parent = r.parents.at(position);
                         storage::NodeV2 node;
                         node.cube = p.cube;
                         node.subtreeTriangles = p.drawnTriangles;
                         node.flags = p.flags;
                         FF_ASSIGN_OR_RETURN(
-                                const DecodedNodeV2 decoded,
+                                const storage::DecodedNodeV2 decoded,
                                 placeUnder(
                                         node,
                                         {p.boundsMin, p.boundsMax},
@@ -411,7 +411,7 @@ Status LevelRegionsV2::writeRegion(std::size_t level, const std::function<void()
             }));
     FF_ASSERT(page == r.pageFill.size() && pending.empty());
     r.records.remove();
-    r.parents = std::vector<DecodedNodeV2>();
+    r.parents = std::vector<storage::DecodedNodeV2>();
     r.representations = std::vector<storage::RepresentationRecord>();
     return Status::ok();
 }

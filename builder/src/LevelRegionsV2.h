@@ -94,7 +94,7 @@ public:
      * placedRoot() says where each root's children and payload went.
      */
     [[nodiscard]] Status
-    finish(std::span<const DecodedNodeV2> rootBoxes,
+    finish(std::span<const storage::DecodedNodeV2> rootBoxes,
            const std::function<void(std::uint64_t done, std::uint64_t total)>& pagesWritten = {});
 
     /** After finish(): what the record of chunk `chunk`'s root (node `node` of the tree above)

@@ -246,7 +246,7 @@ Result<PrototypeBuildResult> PrototypeBuilder::writeInMemoryV2(
     SubtreeV2Input input;
     input.prototype = encoding.storedIndex;
     input.grid = &encoding.grid;
-    input.rootParent = rootParentV2({{boundsMin.x, boundsMin.y, boundsMin.z}, {boundsMax.x, boundsMax.y, boundsMax.z}});
+    input.rootParent = storage::rootParentV2({{boundsMin.x, boundsMin.y, boundsMin.z}, {boundsMax.x, boundsMax.y, boundsMax.z}});
     input.threads = mThreads;
     input.standIns = standInKinds(mParams);
     FF_RETURN_IF_ERROR(shapeLeavesV2(built.nodes, all, leafShapeV2(mParams, encoding, mThreads)));
@@ -290,10 +290,10 @@ Result<PrototypeBuildResult> PrototypeBuilder::finishChunkedV2(
     FF_RETURN_IF_ERROR(shapeLeavesV2(nodes, ownTriangles, leafShapeV2(mParams, encoding, mThreads)));
     const glm::vec3 boundsMin = nodes[0].boundsMin;
     const glm::vec3 boundsMax = nodes[0].boundsMax;
-    const DecodedNodeV2 rootParent =
-            rootParentV2({{boundsMin.x, boundsMin.y, boundsMin.z}, {boundsMax.x, boundsMax.y, boundsMax.z}});
-    const std::vector<DecodedNodeV2> decoded = decodedNodesV2(nodes, rootParent);
-    std::vector<DecodedNodeV2> rootBoxes(result.chunks);
+    const storage::DecodedNodeV2 rootParent =
+            storage::rootParentV2({{boundsMin.x, boundsMin.y, boundsMin.z}, {boundsMax.x, boundsMax.y, boundsMax.z}});
+    const std::vector<storage::DecodedNodeV2> decoded = decodedNodesV2(nodes, rootParent);
+    std::vector<storage::DecodedNodeV2> rootBoxes(result.chunks);
     for (std::size_t n = 0; n < nodes.size(); ++n)
         if (chunkOf[n] >= 0)
             rootBoxes.at(static_cast<std::size_t>(chunkOf[n])) = decoded[n];

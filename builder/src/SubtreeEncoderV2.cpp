@@ -59,11 +59,11 @@ storage::NodeBox boxOf(const glm::vec3& min, const glm::vec3& max) {
     return {toArray(min), toArray(max)};
 }
 
-std::vector<DecodedNodeV2> decodedNodes(
-        const std::vector<BuildNode>& nodes, const Tree& tree, const DecodedNodeV2& rootParent) {
-    std::vector<DecodedNodeV2> decoded(nodes.size());
+std::vector<storage::DecodedNodeV2> decodedNodes(
+        const std::vector<BuildNode>& nodes, const Tree& tree, const storage::DecodedNodeV2& rootParent) {
+    std::vector<storage::DecodedNodeV2> decoded(nodes.size());
     for (const std::uint32_t n : tree.order) {
-        const DecodedNodeV2& parent =
+        const storage::DecodedNodeV2& parent =
                 tree.parent[n] == kNone ? rootParent : decoded[tree.parent[n]];
         storage::NodeV2 record;
         // The box lies inside its parent by construction: quantizing outward cannot fail.
@@ -131,15 +131,11 @@ storage::NodeBox boundsInside(
     return box;
 }
 
-DecodedNodeV2 rootParentV2(const storage::NodeBox& hierarchy) noexcept {
-    return {hierarchy, storage::rootParentCell(hierarchy)};
-}
-
-Result<DecodedNodeV2> placeUnder(
+Result<storage::DecodedNodeV2> placeUnder(
         storage::NodeV2& record,
         const storage::NodeBox& bounds,
         const storage::NodeBox& cell,
-        const DecodedNodeV2& parent) {
+        const storage::DecodedNodeV2& parent) {
     record.bounds = boundsInside(bounds.min, bounds.max, parent.bounds);
     record.flags = static_cast<std::uint8_t>(record.flags & ~storage::kNodeV2OctantCell);
     record.octant = 0;
@@ -147,7 +143,7 @@ Result<DecodedNodeV2> placeUnder(
         record.flags = static_cast<std::uint8_t>(record.flags | storage::kNodeV2OctantCell);
         record.octant = *octant;
     }
-    DecodedNodeV2 decoded;
+    storage::DecodedNodeV2 decoded;
     FF_ASSIGN_OR_RETURN(decoded.bounds, storage::quantizeBoundsOutward(record.bounds, parent.bounds));
     storage::NodeV2 read = record;
     read.bounds = decoded.bounds;
@@ -155,8 +151,8 @@ Result<DecodedNodeV2> placeUnder(
     return decoded;
 }
 
-std::vector<DecodedNodeV2>
-decodedNodesV2(const std::vector<BuildNode>& nodes, const DecodedNodeV2& rootParent) {
+std::vector<storage::DecodedNodeV2>
+decodedNodesV2(const std::vector<BuildNode>& nodes, const storage::DecodedNodeV2& rootParent) {
     return decodedNodes(nodes, breadthFirst(nodes), rootParent);
 }
 
@@ -381,14 +377,14 @@ Result<SubtreeV2Result> writeSubtreeV2(
         return static_cast<std::uint32_t>(index);
     };
 
-    const std::vector<DecodedNodeV2> decoded = decodedNodes(nodes, tree, input.rootParent);
+    const std::vector<storage::DecodedNodeV2> decoded = decodedNodes(nodes, tree, input.rootParent);
     for (std::size_t p = 0; p < pages.size(); ++p) {
         if (p > 0)
             FF_RETURN_IF_ERROR(table.writeOpen(writer));
         storage::NodePageV2Writer& page = table.open();
         for (const std::uint32_t n : pages[p]) {
             const BuildNode& node = nodes[n];
-            const DecodedNodeV2& parent =
+            const storage::DecodedNodeV2& parent =
                     tree.parent[n] == kNone ? input.rootParent : decoded[tree.parent[n]];
             storage::NodeV2 record;
             record.cube = quantizeCube(node.cube);

@@ -9,6 +9,7 @@
 
 #include <ff/builder/ClusterBuild.h>
 #include <ff/storage/ClusterCodec.h>
+#include <ff/storage/NodeCellV2.h>
 #include <ff/storage/NodePageV2.h>
 #include <ff/storage/NodeRecordV2.h>
 #include <ff/storage/SceneFormat.h>
@@ -68,26 +69,16 @@ inline std::uint8_t unlitFlag(double drawnTriangles, double unlitTriangles) noex
                    : std::uint8_t{0};
 }
 
-/** What a v2 record's children are read against: its decoded bounds and its cell
- *  (storage/NodeCellV2.h). */
-struct DecodedNodeV2 {
-    storage::NodeBox bounds;
-    storage::NodeBox cell;
-};
-
-/** What the root of a hierarchy whose box is `hierarchy` is read against. */
-DecodedNodeV2 rootParentV2(const storage::NodeBox& hierarchy) noexcept;
-
 /**
  * Gives `record` its bounds (`bounds` inside the parent's, boundsInside) and, where the node's
  * cell `cell` is an octant of the parent's (storage::matchingOctant), that octant with
  * kNodeV2OctantCell; returns what the node's children are read against, as a reader decodes it.
  */
-[[nodiscard]] Result<DecodedNodeV2> placeUnder(
+[[nodiscard]] Result<storage::DecodedNodeV2> placeUnder(
         storage::NodeV2& record,
         const storage::NodeBox& bounds,
         const storage::NodeBox& cell,
-        const DecodedNodeV2& parent);
+        const storage::DecodedNodeV2& parent);
 
 /** What a v2 hierarchy is written against. */
 struct SubtreeV2Input {
@@ -96,7 +87,7 @@ struct SubtreeV2Input {
     const storage::PositionGrid* grid = nullptr;
     /** What the root is read against: rootParentV2 of the prototype record's bounds, or of the
      *  header's for the instance level. Its bounds must hold the root's bounds. */
-    DecodedNodeV2 rootParent;
+    storage::DecodedNodeV2 rootParent;
     /** Per instance index, the triangles an Instance node draws (its prototype's). */
     std::span<const std::uint64_t> instanceTriangles;
     /** Every node with placedChildren or placedTriangles, resolved. */
@@ -127,8 +118,8 @@ struct SubtreeV2Result {
  * stores them: what the records a chunk's root has below it (written before it) are read
  * against. Nodes not reached are left empty.
  */
-std::vector<DecodedNodeV2>
-decodedNodesV2(const std::vector<BuildNode>& nodes, const DecodedNodeV2& rootParent);
+std::vector<storage::DecodedNodeV2>
+decodedNodesV2(const std::vector<BuildNode>& nodes, const storage::DecodedNodeV2& rootParent);
 
 /** The node's bounds as a box inside `parent`, as a v2 record is given them (float noise of a
  *  recomputed union clamped; an empty node at the parent's min corner). */

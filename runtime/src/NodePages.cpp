@@ -295,7 +295,7 @@ Fetch NodePages::readTop(
     if (fetch(ref.page, storage::PageType::Nodes, priority, payload) != Fetch::Ready)
         return Fetch::Missing;
     Result<storage::NodeRecord> node =
-            mV2 ? decodeV2(payload, ref, {box, storage::rootParentCell(box)}, 0, subtreeTriangles)
+            mV2 ? decodeV2(payload, ref, storage::rootParentV2(box), 0, subtreeTriangles)
                 : mScene.decodeNode(payload, ref);
     if (!node) {
         reportFailure(node.status());
@@ -338,7 +338,7 @@ Result<storage::NodeRecord> NodePages::child(
 Result<storage::NodeRecord> NodePages::decodeV2(
         std::span<const std::byte> payload,
         storage::NodeRef ref,
-        const ParentV2& parent,
+        const storage::DecodedNodeV2& parent,
         std::uint8_t level,
         float* subtreeTriangles) const {
     FF_ASSIGN_OR_RETURN(

@@ -12,6 +12,7 @@
 #include <ff/runtime/Selection.h>
 #include <ff/runtime/TransformMetric.h>
 #include <ff/runtime/Traversal.h>
+#include <ff/storage/NodeCellV2.h>
 #include <ff/storage/NodeRecordV2.h>
 #include <ff/storage/SceneIndex.h>
 
@@ -269,16 +270,10 @@ private:
             float priority,
             storage::NodeRecord& out,
             float* subtreeTriangles = nullptr);
-    /** What a format 2 record is read against: its parent's decoded bounds and cell (a
-     *  root's: its hierarchy's box, storage::rootParentCell of it). */
-    struct ParentV2 {
-        storage::NodeBox bounds;
-        storage::NodeBox cell;
-    };
     [[nodiscard]] Result<storage::NodeRecord> decodeV2(
             std::span<const std::byte> payload,
             storage::NodeRef ref,
-            const ParentV2& parent,
+            const storage::DecodedNodeV2& parent,
             std::uint8_t level,
             float* subtreeTriangles) const;
     /** A format 2 cell's representations into mRepresentations (its own page fetched). */

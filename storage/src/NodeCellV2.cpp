@@ -36,6 +36,10 @@ NodeBox rootParentCell(const NodeBox& hierarchy) noexcept {
     return out;
 }
 
+DecodedNodeV2 rootParentV2(const NodeBox& hierarchy) noexcept {
+    return {hierarchy, rootParentCell(hierarchy)};
+}
+
 NodeBox cellOfNode(const NodeV2& node, const NodeBox& parentCell) noexcept {
     return (node.flags & kNodeV2OctantCell) != 0 ? octantCell(parentCell, node.octant) : node.bounds;
 }

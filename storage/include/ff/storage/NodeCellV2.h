@@ -13,6 +13,13 @@
 
 namespace ff::storage {
 
+/** A v2 node's decoded bounds and cell: what its children's records are read against (what a
+ *  root's is read against: rootParentV2). */
+struct DecodedNodeV2 {
+    NodeBox bounds;
+    NodeBox cell;
+};
+
 /** Octant `octant` (bit 0 x, bit 1 y, bit 2 z: the upper half) of `cell`. Siblings share
  *  their faces exactly: each axis splits at one midpoint. */
 [[nodiscard]] NodeBox octantCell(const NodeBox& cell, std::uint8_t octant) noexcept;
@@ -21,6 +28,9 @@ namespace ff::storage {
  *  hierarchy box's min with twice the edge of the builder's root cube, whose edge is the box's
  *  largest side · (1 + 10⁻⁵) + the smallest normal float (rootCellEdge). */
 [[nodiscard]] NodeBox rootParentCell(const NodeBox& hierarchy) noexcept;
+
+/** What the root of a hierarchy whose box is `hierarchy` is read against. */
+[[nodiscard]] DecodedNodeV2 rootParentV2(const NodeBox& hierarchy) noexcept;
 
 /** Edge of the octree's root cube around a box of `size`: a hair larger than its largest
  *  side, so that no centroid sits on the cube's max face. */
