@@ -11,7 +11,7 @@ NodeBox octantCell(const NodeBox& cell, std::uint8_t octant) noexcept {
     NodeBox out;
     for (std::size_t a = 0; a < 3; ++a) {
         const float mid = cell.min[a] + 0.5f * (cell.max[a] - cell.min[a]);
-        const bool upper = (octant >> a & 1u) != 0;
+        const bool upper = (static_cast<unsigned>(octant) >> a & 1u) != 0;
         out.min[a] = upper ? mid : cell.min[a];
         out.max[a] = upper ? cell.max[a] : mid;
     }

@@ -18,7 +18,7 @@ TEST(NodeCellV2Test, OctantsTileTheirParentExactly) {
     for (std::uint8_t o = 0; o < 8; ++o) {
         const NodeBox c = octantCell(cell, o);
         for (std::size_t a = 0; a < 3; ++a) {
-            const bool upper = (o >> a & 1u) != 0;
+            const bool upper = (static_cast<unsigned>(o) >> a & 1u) != 0;
             EXPECT_EQ(upper ? c.max[a] : c.min[a], upper ? cell.max[a] : cell.min[a]);
             const NodeBox sibling = octantCell(cell, static_cast<std::uint8_t>(o ^ (1u << a)));
             EXPECT_EQ(upper ? c.min[a] : c.max[a], upper ? sibling.max[a] : sibling.min[a]);
@@ -40,7 +40,7 @@ TEST(NodeCellV2Test, TheBuildersCellsAreFoundDownAnOctreesDepth) {
             const auto octant = static_cast<std::uint8_t>(path >> 29);
             const float half = 0.5f * size;
             for (std::size_t a = 0; a < 3; ++a)
-                min[a] += (octant >> a & 1u) != 0 ? half : 0.0f;
+                min[a] += (static_cast<unsigned>(octant) >> a & 1u) != 0 ? half : 0.0f;
             size = half;
             const NodeBox cell{{min[0], min[1], min[2]}, {min[0] + size, min[1] + size, min[2] + size}};
             const std::optional<std::uint8_t> found = matchingOctant(cell, parent);
