@@ -28,8 +28,8 @@ StandInKinds standInKinds(const HierarchyParams& params) {
 
 LeafShapeV2 leafShapeV2(const HierarchyParams& params, const PrototypeEncodingV2& encoding, unsigned threads) {
     LeafShapeV2 shape;
-    shape.leafTriangles = encoding.leafTriangles;
-    shape.clusterNodes = params.clusterNodes;
+    shape.leafTriangles = encoding.leaves.leafTriangles;
+    shape.clusterNodes = encoding.leaves.clusterNodes;
     shape.grid = &encoding.grid;
     shape.bakeResolution = params.bakeResolution;
     shape.threads = threads;

@@ -64,9 +64,9 @@ struct BuiltHierarchy {
 struct PrototypeEncodingV2 {
     storage::PositionGrid grid;      ///< its clusters' grid
     std::uint32_t storedIndex = 0;   ///< its index in the file's Prototypes section
-    /** Subtrees of at most this many triangles become one leaf (HierarchyParams::leafTriangles
-     *  of its placements). */
-    std::uint64_t leafTriangles = kClusterLeafTriangles;
+    /** Its leaves' size and whether they are split into cluster nodes (HierarchyParams::leavesFor
+     *  its placements and size). */
+    PrototypeLeaves leaves;
 };
 
 /** Bytes of memory the builder plans per triangle of a chunk (triangle, nodes, records). */

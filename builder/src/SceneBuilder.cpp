@@ -153,8 +153,6 @@ Result<std::unique_ptr<SceneBuilder>> SceneBuilder::create(
     impl->report.threads = impl->options.threads;
     impl->report.decomposition = std::string(decompositionName(options.hierarchy.decomposition));
     if (options.formatVersion == storage::kFormatVersion2) {
-        impl->report.clusterLeafTriangles = options.hierarchy.leafTriangles();
-        impl->report.clusterNodes = options.hierarchy.clusterNodes;
         impl->report.standIns = options.hierarchy.standIns;
         impl->report.splatSpacing = options.hierarchy.splatSpacing;
         impl->report.standInsMeasured = options.hierarchy.anyStandIns() && options.hierarchy.measureStandIns;
@@ -313,10 +311,13 @@ Result<BuildReport> SceneBuilder::finish() {
             encoding = PrototypeEncodingV2{
                     positionGrid,
                     static_cast<std::uint32_t>(protoRecords.size()),
-                    s.options.hierarchy.leafTriangles(placements[p])};
-            report.smallestClusterLeafTriangles = report.smallestClusterLeafTriangles == 0
-                    ? encoding->leafTriangles
-                    : std::min(report.smallestClusterLeafTriangles, encoding->leafTriangles);
+                    s.options.hierarchy.leavesFor(placements[p], proto.run.count())};
+            const std::uint64_t leaf = encoding->leaves.leafTriangles;
+            report.clusterLeafTriangles = std::max(report.clusterLeafTriangles, leaf);
+            report.smallestClusterLeafTriangles =
+                    report.smallestClusterLeafTriangles == 0 ? leaf : std::min(report.smallestClusterLeafTriangles, leaf);
+            if (encoding->leaves.clusterNodes)
+                ++report.clusterNodePrototypes;
             report.maxGridBits = std::max<std::uint32_t>(report.maxGridBits, static_cast<std::uint32_t>(positionGrid.bits));
         }
         FF_ASSIGN_OR_RETURN(
@@ -508,7 +509,8 @@ std::string buildReportJson(const BuildReport& r) {
             {"decomposition", r.decomposition},
             {"cluster_leaf_triangles", r.clusterLeafTriangles},
             {"smallest_cluster_leaf_triangles", r.smallestClusterLeafTriangles},
-            {"cluster_nodes", r.clusterNodes},
+            {"cluster_nodes", r.clusterNodePrototypes > 0},
+            {"cluster_node_prototypes", r.clusterNodePrototypes},
             {"stand_ins",
              {{"enabled", r.standIns},
               {"nodes", r.standInNodes},

@@ -359,6 +359,38 @@ std::vector<std::byte> fileBytes(const fs::path& path) {
     return bytes;
 }
 
+TEST(SceneV2Test, ClusterNodesGoToPrototypesPlacedOnceAboveTheSize) {
+    // A prototype placed once gets cluster nodes where it has more triangles than the size
+    // (kClusterNodesAboveTriangles by default; lowered here), the same bytes as asking for them.
+    const fs::path dir = freshTestDir();
+    const RecordingSink terrain = generate("terrain:triangles=20000");
+    BuildOptions small = v2Options();
+    small.hierarchy.clusterNodesAboveTriangles = 10000;
+    const BuildReport bySize = buildOrFail(terrain, dir / "by-size.ffs", small);
+    EXPECT_EQ(bySize.clusterNodePrototypes, 1u);
+    EXPECT_EQ(bySize.clusterLeafTriangles, kClusterNodesLeafTriangles);
+    BuildOptions asked = v2Options();
+    asked.hierarchy.clusterNodes = true;
+    buildOrFail(terrain, dir / "asked.ffs", asked);
+    EXPECT_EQ(fileBytes(dir / "by-size.ffs"), fileBytes(dir / "asked.ffs"));
+
+    BuildOptions large = v2Options();
+    large.hierarchy.clusterNodesAboveTriangles = 20000;
+    const BuildReport under = buildOrFail(terrain, dir / "under.ffs", large);
+    EXPECT_EQ(under.clusterNodePrototypes, 0u);
+    EXPECT_EQ(under.clusterLeafTriangles, kClusterLeafTriangles);
+    EXPECT_LT(under.nodes * 4, bySize.nodes);
+    small.hierarchy.clusterNodes = false; // told otherwise
+    EXPECT_EQ(buildOrFail(terrain, dir / "refused.ffs", small).clusterNodePrototypes, 0u);
+
+    // Placed more than once, a prototype keeps small leaves and no cluster nodes.
+    BuildOptions forest = v2Options();
+    forest.hierarchy.clusterNodesAboveTriangles = 1;
+    const BuildReport trees = buildOrFail(generate("forest:trees=4"), dir / "forest.ffs", forest);
+    EXPECT_EQ(trees.clusterNodePrototypes, 0u);
+    EXPECT_EQ(trees.smallestClusterLeafTriangles, kInstancedLeafTriangles);
+}
+
 TEST(SceneV2Test, SameInputGivesTheSameBytesWhateverTheThreads) {
     const fs::path dir = freshTestDir();
     const RecordingSink scene = generate("forest:trees=16");

@@ -200,6 +200,9 @@ TEST(BuildCommandTest, ClusterNodesLetTheCutStopInsideALeaf) {
     EXPECT_EQ(nodes.at("cluster_leaf_triangles").get<std::uint64_t>(), builder::kClusterNodesLeafTriangles);
     EXPECT_TRUE(nodes.at("cluster_nodes").get<bool>());
     EXPECT_EQ(nodes.at("stored_triangles"), leaves.at("stored_triangles"));
+    withNodes.push_back("--no-cluster-nodes"); // asking for both is refused
+    EXPECT_FALSE(exitedWith(build(dir, withNodes, dir / "both.ffs"), 0));
+    EXPECT_FALSE(fs::exists(dir / "both.ffs"));
     const ProcessResult checked = runFarfield({"check", (dir / "nodes.ffs").string()}, dir);
     EXPECT_TRUE(exitedWith(checked, 0)) << checked.describe();
 

@@ -43,7 +43,8 @@ struct BuildArgs {
     std::string spill = "compact";
     unsigned format = 1;
     std::optional<std::uint64_t> clusterLeafTriangles; ///< unset: HierarchyParams::leafTriangles()
-    bool clusterNodes = false;
+    bool clusterNodes = false;   ///< --cluster-nodes: every prototype placed once
+    bool noClusterNodes = false; ///< --no-cluster-nodes: none; neither: by size
     bool standIns = false;
     int splatSpacing = 0;
     std::string standInChoice = "measured";
@@ -86,7 +87,8 @@ int runBuild(const BuildArgs& args) {
     options.spillCodec = *spill;
     options.formatVersion = args.format;
     options.hierarchy.clusterLeafTriangles = args.clusterLeafTriangles;
-    options.hierarchy.clusterNodes = args.clusterNodes;
+    if (args.clusterNodes || args.noClusterNodes)
+        options.hierarchy.clusterNodes = args.clusterNodes;
     options.hierarchy.standIns = args.standIns;
     options.hierarchy.splatSpacing = args.splatSpacing;
     options.hierarchy.measureStandIns = args.standInChoice == "measured";
@@ -225,12 +227,17 @@ CommandRunner addBuildCommand(CLI::App& app) {
             ->capture_default_str();
     cmd->add_option("--cluster-leaf-triangles", args->clusterLeafTriangles,
                     "--format 2: subtrees of at most this many triangles become one leaf of whole clusters (0: keep the "
-                    "leaves); default 4096, 65536 with --cluster-nodes, and 16 in a prototype placed more than once "
+                    "leaves); default 4096, 65536 with cluster nodes, and 16 in a prototype placed more than once "
                     "(its whole leaves are drawn in every placement in view)");
-    cmd->add_flag("--cluster-nodes", args->clusterNodes,
-                  "--format 2: give each leaf a tree of nodes down to pieces of about a cluster, each with its own bounds "
-                  "and cube, so the cut can stop inside a leaf: far views draw far fewer triangles, for 0.6-1 byte a "
-                  "triangle more (docs/results, \"Cluster nodes\")");
+    CLI::Option* clusterNodes = cmd->add_flag(
+            "--cluster-nodes", args->clusterNodes,
+            "--format 2: give each leaf a tree of nodes down to pieces of about a cluster, each with its own bounds "
+            "and cube, so the cut can stop inside a leaf: far views draw far fewer triangles, for 0.6-1 byte a "
+            "triangle more (docs/results, \"Cluster nodes\"); default: only in prototypes placed once with more "
+            "than 2^23 triangles");
+    cmd->add_flag("--no-cluster-nodes", args->noClusterNodes,
+                  "--format 2: no cluster nodes, whatever a prototype's size (its leaves drawn whole)")
+            ->excludes(clusterNodes);
     cmd->add_flag("--stand-ins", args->standIns,
                   "--format 2: give cells a simplified copy of their subtree (meshoptimizer, borders locked), drawn "
                   "instead of it where its error is below --epsilon pixels (docs/methods.md, \"Stand-ins\")");

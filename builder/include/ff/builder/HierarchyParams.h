@@ -50,10 +50,25 @@ inline constexpr std::uint64_t kClusterLeafTriangles = 4096;
  *  cut the surface instead (docs/results, "Cluster nodes from larger leaves": the 10^9 terrain
  *  filling the screen from above 50.2 MB instead of 85.4). */
 inline constexpr std::uint64_t kClusterNodesLeafTriangles = 65536;
+/** A prototype placed once with more triangles than this gets cluster nodes unless told
+ *  otherwise. At format 2's ~7 bytes a triangle, a prototype this size or smaller costs at most
+ *  ~60 MB drawn whole, within issue 16's 64 MB budget for a complete frame, so its leaves may
+ *  be drawn whole and it keeps the fewer bytes (the scanned models' 7.2-7.6 a triangle against
+ *  8.1-8.6 with cluster nodes) and the accuracy of triangles (the 4 M terrain from 6 radii: 48.6
+ *  dB against 32.3); a larger one would draw whole leaves wherever they cover a pixel or two
+ *  (the 64 M terrain's whole view: all 410 MB of it against 21.8 MB; docs/results, "Cluster
+ *  nodes by size"). */
+inline constexpr std::uint64_t kClusterNodesAboveTriangles = std::uint64_t{1} << 23;
 /** The leaf the default gives a prototype placed more than once: about the octree's own leaves
  *  (its cube-cost rule leaves ~12 triangles), so the cut of an instanced tree stops where
  *  format 1's does (docs/results, "Format 2 paged"). */
 inline constexpr std::uint64_t kInstancedLeafTriangles = 16;
+
+/** How a format 2 prototype's leaves are shaped (HierarchyParams::leavesFor). */
+struct PrototypeLeaves {
+    std::uint64_t leafTriangles = kClusterLeafTriangles; ///< subtrees this small become one leaf
+    bool clusterNodes = false;                           ///< each leaf split into cluster nodes
+};
 
 /** How the builder subdivides and bakes. The defaults are the ones the benchmarks chose. */
 struct HierarchyParams {
@@ -77,15 +92,17 @@ struct HierarchyParams {
     /** Format 2 only: a subtree of at most this many triangles is written as one leaf of whole
      *  clusters, so a node's 48-byte record is spread over many triangles (the v2 estimate of
      *  docs/results "Compact geometry" was measured at 4096). 0 keeps the hierarchy's leaves.
-     *  Unset: kClusterLeafTriangles, or kClusterNodesLeafTriangles with clusterNodes, for a
-     *  prototype placed once; kInstancedLeafTriangles for one placed more (leafTriangles()). */
+     *  Unset: kClusterLeafTriangles, or kClusterNodesLeafTriangles with cluster nodes, for a
+     *  prototype placed once; kInstancedLeafTriangles for one placed more (leavesFor()). */
     std::optional<std::uint64_t> clusterLeafTriangles;
     /** Format 2 only: each leaf gets a tree of nodes, at most four wide, down to pieces of
      *  about a cluster, each with its bounds and cube, so a cut can stop inside a leaf
      *  (builder/src/ClusterNodes.h): far views draw far fewer triangles for 0.6-1 byte a
-     *  triangle more (docs/results "Cluster nodes"). Off by default: it takes the scanned
-     *  models over issue 16's 8 bytes a triangle, and teleports gain nothing from it. */
-    bool clusterNodes = false;
+     *  triangle more (docs/results "Cluster nodes"). Unset: by the prototype's size, for a
+     *  prototype placed once with more than clusterNodesAboveTriangles (leavesFor()). */
+    std::optional<bool> clusterNodes;
+    /** Where clusterNodes is unset: the size above which a prototype placed once gets them. */
+    std::uint64_t clusterNodesAboveTriangles = kClusterNodesAboveTriangles;
 
     /** Format 2 only: cells carry simplified stand-ins of their subtrees, drawn where their
      *  error projects below ε pixels (builder/src/StandIns.h, docs/methods.md §12). */
@@ -102,22 +119,24 @@ struct HierarchyParams {
     /** Whether cells get stand-ins of either kind. */
     [[nodiscard]] bool anyStandIns() const noexcept { return standIns || splatSpacing > 0; }
     /**
-     * The leaf size of a prototype placed `placements` times: clusterLeafTriangles where set;
-     * else, placed more than once, kInstancedLeafTriangles, and placed once, its default for
-     * clusterNodes. Where a leaf's cell covers more than ε pixels all its triangles are drawn,
-     * in every placement in view, while its records are stored once for all of them: at the
-     * forest's view a tree placed 16,384 times with leaves of 4,096 triangles drew 42 times
-     * format 1's triangles, and 16 trees with leaves of 256 (the default shared among the
-     * placements, tried) still 16 times (docs/results, "Format 2 paged"). A prototype placed
-     * once (a terrain, a scan) keeps the large leaves that hold it to 8 bytes a triangle; its
-     * far views are what stand-ins are for.
+     * How the leaves of a prototype of `triangles` triangles placed `placements` times are
+     * shaped: cluster nodes where clusterNodes says, else by size (kClusterNodesAboveTriangles,
+     * placed once only); leaves of clusterLeafTriangles where set, else, placed more than once,
+     * kInstancedLeafTriangles, and placed once, the default for its cluster nodes. Where a
+     * leaf's cell covers more than ε pixels all its triangles are drawn, in every placement in
+     * view, while its records are stored once for all of them: at the forest's view a tree
+     * placed 16,384 times with leaves of 4,096 triangles drew 42 times format 1's triangles,
+     * and 16 trees with leaves of 256 (the default shared among the placements, tried) still
+     * 16 times (docs/results, "Format 2 paged"). A prototype placed once (a terrain, a scan)
+     * keeps the large leaves that hold it to 8 bytes a triangle.
      */
-    [[nodiscard]] std::uint64_t leafTriangles(std::uint64_t placements = 1) const noexcept {
+    [[nodiscard]] PrototypeLeaves leavesFor(std::uint64_t placements, std::uint64_t triangles) const noexcept {
+        const bool splitLeaves = clusterNodes.value_or(placements <= 1 && triangles > clusterNodesAboveTriangles);
         if (clusterLeafTriangles)
-            return *clusterLeafTriangles;
+            return {*clusterLeafTriangles, splitLeaves};
         if (placements > 1)
-            return kInstancedLeafTriangles;
-        return clusterNodes ? kClusterNodesLeafTriangles : kClusterLeafTriangles;
+            return {kInstancedLeafTriangles, splitLeaves};
+        return {splitLeaves ? kClusterNodesLeafTriangles : kClusterLeafTriangles, splitLeaves};
     }
 };
 

@@ -111,11 +111,12 @@ struct BuildReport {
     std::uint64_t nodes = 0;
     std::uint64_t leafNodes = 0;           ///< prototype nodes without children (geometry nodes)
     std::string decomposition;             ///< HierarchyParams::decomposition's name
-    std::uint64_t clusterLeafTriangles = 0; ///< format 2: a prototype placed once (0 for format 1)
-    /** Format 2: the smallest leaf a prototype got (HierarchyParams::leafTriangles of its
-     *  placements; 0 for format 1 or without prototypes). */
+    /** Format 2: the largest and the smallest leaf a prototype got (HierarchyParams::leavesFor
+     *  its placements and size; 0 for format 1 or without prototypes). */
+    std::uint64_t clusterLeafTriangles = 0;
     std::uint64_t smallestClusterLeafTriangles = 0;
-    bool clusterNodes = false;             ///< format 2: HierarchyParams's
+    /** Format 2: the prototypes whose leaves were split into cluster nodes (leavesFor). */
+    std::uint32_t clusterNodePrototypes = 0;
     std::uint32_t maxDepth = 0;            ///< deepest prototype level
     std::uint32_t instanceLevelDepth = 0;
     std::uint64_t chunks = 0;
