@@ -194,7 +194,7 @@ TEST(BuildCommandTest, ClusterNodesLetTheCutStopInsideALeaf) {
     EXPECT_GT(nodes.at("nodes").get<std::uint64_t>(), 4 * leaves.at("nodes").get<std::uint64_t>());
     // Cluster nodes take their leaves from larger subtrees unless told otherwise.
     EXPECT_EQ(leaves.at("cluster_leaf_triangles").get<std::uint64_t>(), builder::kClusterLeafTriangles);
-    // The terrain is placed once: it keeps the large leaves (HierarchyParams::leafTriangles).
+    // The terrain is placed once: it keeps the large leaves (HierarchyParams::leavesFor).
     EXPECT_EQ(leaves.at("smallest_cluster_leaf_triangles").get<std::uint64_t>(), builder::kClusterLeafTriangles);
     EXPECT_FALSE(leaves.at("cluster_nodes").get<bool>());
     EXPECT_EQ(nodes.at("cluster_leaf_triangles").get<std::uint64_t>(), builder::kClusterNodesLeafTriangles);

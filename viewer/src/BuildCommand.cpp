@@ -42,7 +42,7 @@ struct BuildArgs {
     std::string tempDirectory;
     std::string spill = "compact";
     unsigned format = 1;
-    std::optional<std::uint64_t> clusterLeafTriangles; ///< unset: HierarchyParams::leafTriangles()
+    std::optional<std::uint64_t> clusterLeafTriangles; ///< unset: HierarchyParams::leavesFor()
     bool clusterNodes = false;   ///< --cluster-nodes: every prototype placed once
     bool noClusterNodes = false; ///< --no-cluster-nodes: none; neither: by size
     bool standIns = false;
