@@ -45,8 +45,10 @@ Status runBuild(const BuildParams& p, const Scenario& scenario, const BenchOptio
         const std::filesystem::path scene = work / "terrain.ffs";
         const std::filesystem::path report = work / "terrain.json";
         FF_ASSIGN_OR_RETURN(const ChildRun run,
-                            runChild({options.selfExe, "build", "--generate", "terrain:triangles=" + std::to_string(step.triangles),
-                                      "-o", scene.string(), "--memory-budget", step.budget, "--report", report.string(), "-q"}));
+                            // Format 1: what the committed build results measured.
+                            runChild({options.selfExe, "build", "--format", "1", "--generate",
+                                      "terrain:triangles=" + std::to_string(step.triangles), "-o", scene.string(),
+                                      "--memory-budget", step.budget, "--report", report.string(), "-q"}));
         FF_ASSIGN_OR_RETURN(const nlohmann::json json, readJsonObject(report, "build report"));
         const auto triangles = json.value("input_triangles", std::uint64_t{0});
         const auto budgetBytes = json.value("memory_budget_bytes", std::uint64_t{0});

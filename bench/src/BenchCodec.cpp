@@ -437,7 +437,8 @@ Status runCodec(const CodecParams& p, const Scenario& scenario, const BenchOptio
     for (const CodecScene& s : p.scenes) {
         std::fprintf(stderr, "%s: building %s\n", scenario.name.c_str(), s.label.c_str());
         const std::filesystem::path scene = work / "scene.ffs";
-        std::vector<std::string> argv = {options.selfExe, "build", "-o", scene.string(), "-q"};
+        // Format 1: the codecs are measured against its 60-byte triangles, read from its segments.
+        std::vector<std::string> argv = {options.selfExe, "build", "--format", "1", "-o", scene.string(), "-q"};
         if (!s.generate.empty())
             argv.insert(argv.end(), {"--generate", s.generate});
         else

@@ -12,8 +12,12 @@
 namespace ff::builder {
 namespace {
 
+// These tests were tuned on format 1's estimates (96-byte records, 60-byte triangles) and
+// state them; format 1 until they are ported (issue 16: version 1 is to be refused).
+constexpr std::uint32_t kFormatOne = storage::kFormatVersion;
+
 PageSizeInputs singleMesh(std::uint64_t triangles) {
-    return {.prototypes = {{.triangles = triangles, .instances = 1}}};
+    return {.prototypes = {{.triangles = triangles, .instances = 1}}, .formatVersion = kFormatOne};
 }
 
 bool paddingWithinShare(const PageSizeInputs& inputs, std::uint32_t pageSize) {
@@ -28,21 +32,22 @@ bool drawsWithinAllowance(const PageSizeInputs& inputs, std::uint32_t pageSize) 
 
 TEST(PageSizeChoiceTest, EstimatesCountTrianglesNodesInstancesAndDraws) {
     // 1000 triangles: 60 kB of triangles plus 150 node records of 96 B.
-    const PageSizeInputs uninstanced{.prototypes = {{.triangles = 1000, .instances = 0}}};
+    const PageSizeInputs uninstanced{.prototypes = {{.triangles = 1000, .instances = 0}}, .formatVersion = kFormatOne};
     EXPECT_EQ(estimatePayloadBytes(uninstanced), 60'000u + 150u * 96u);
     // An instance: its node (96 B), its transform (56 B), a seventh of an instance-level cell.
-    const PageSizeInputs instanced{.prototypes = {{.triangles = 1, .instances = 101}}};
+    const PageSizeInputs instanced{.prototypes = {{.triangles = 1, .instances = 101}}, .formatVersion = kFormatOne};
     EXPECT_EQ(
             estimatePayloadBytes(instanced) - estimatePayloadBytes(singleMesh(1)),
             100u * (96u + 56u + 13u));
     // An empty prototype is not stored: no pages, no payload, no draws.
     const PageSizeInputs withEmpty{
-            .prototypes = {{.triangles = 1000, .instances = 1}, {.triangles = 0, .instances = 50}}};
+            .prototypes = {{.triangles = 1000, .instances = 1}, {.triangles = 0, .instances = 50}},
+            .formatVersion = kFormatOne};
     EXPECT_EQ(estimatePayloadBytes(withEmpty), estimatePayloadBytes(singleMesh(1000)));
     EXPECT_EQ(fixedPartialPages(withEmpty), fixedPartialPages(singleMesh(1000)));
     // 4 KiB pages hold 68 triangles: 800 triangles span 12 pages, drawn by each of 10 instances.
     ASSERT_EQ(storage::trianglesPerPage(4096), 68u);
-    EXPECT_EQ(drawCommands({.prototypes = {{.triangles = 800, .instances = 10}}}, 4096), 120u);
+    EXPECT_EQ(drawCommands({.prototypes = {{.triangles = 800, .instances = 10}}, .formatVersion = kFormatOne}, 4096), 120u);
     EXPECT_EQ(drawCommands(withEmpty, 4096), 15u);
 }
 
@@ -57,7 +62,7 @@ TEST(PageSizeChoiceTest, SmallModelsGetSmallPagesLargeScenesTheDefault) {
 // The molecule: 5 spheres of 800 triangles, 6534 instances. Padding alone would pick 4 KiB
 // (78 k draw commands against 6.5 k at 64 KiB); the draw rule keeps one page per sphere pair.
 TEST(PageSizeChoiceTest, ManyInstancesOfSmallPrototypesKeepLargerPages) {
-    PageSizeInputs molecule;
+    PageSizeInputs molecule{.prototypes = {}, .formatVersion = kFormatOne};
     for (int p = 0; p < 5; ++p)
         molecule.prototypes.push_back({.triangles = 800, .instances = 1307});
     ASSERT_TRUE(paddingWithinShare(molecule, 4096));
@@ -71,7 +76,7 @@ TEST(PageSizeChoiceTest, ChoiceIsTheLargestThatKeepsPaddingAndDrawsWithinBounds)
     for (std::uint64_t triangles : {100ull, 5'000ull, 20'000ull, 52'588ull, 100'000ull, 300'000ull})
         for (std::uint32_t prototypes : {1u, 3u, 40u})
             for (std::uint64_t instances : {1ull, 30ull, 3'000ull}) {
-                PageSizeInputs inputs;
+                PageSizeInputs inputs{.prototypes = {}, .formatVersion = kFormatOne};
                 for (std::uint32_t p = 0; p < prototypes; ++p)
                     inputs.prototypes.push_back(
                             {.triangles = triangles / prototypes, .instances = instances});
@@ -102,7 +107,7 @@ TEST(PageSizeChoiceTest, MoreContentNeverShrinksPagesMorePrototypesNeverGrowThem
     }
     previous = storage::kMaxPageSize;
     for (std::uint32_t prototypes = 1; prototypes < 5000; prototypes *= 2) {
-        PageSizeInputs inputs;
+        PageSizeInputs inputs{.prototypes = {}, .formatVersion = kFormatOne};
         for (std::uint32_t p = 0; p < prototypes; ++p)
             inputs.prototypes.push_back({.triangles = 200'000 / prototypes, .instances = 1});
         const std::uint32_t chosen = choosePageSize(inputs);

@@ -274,6 +274,7 @@ TEST(SceneV2Test, EveryOctreeNodeIsReadWithTheCellItsCubeWasBakedOver) {
         for (const bool chunked : {false, true}) {
             SCOPED_TRACE(chunked ? "chunked" : "whole");
             BuildOptions v1Options;
+            v1Options.formatVersion = storage::kFormatVersion;
             v1Options.threads = 1;
             v1Options.pageSize = storage::kMinPageSize;
             if (chunked)
@@ -336,7 +337,9 @@ TEST(SceneV2Test, ScannedModelsAndTheTerrainTakeAtMostEightBytesATriangle) {
     }
     for (const auto& [name, scene] : scenes) {
         SCOPED_TRACE(name);
-        const BuildReport v1 = buildOrFail(scene, dir / "v1.ffs", BuildOptions{});
+        BuildOptions v1Options;
+        v1Options.formatVersion = storage::kFormatVersion;
+        const BuildReport v1 = buildOrFail(scene, dir / "v1.ffs", v1Options);
         const BuildReport v2 = buildOrFail(scene, dir / "v2.ffs", v2Options());
         const std::uint64_t kept = v2.inputTriangles - v2.droppedNonFinite - v2.droppedDegenerate;
         ASSERT_GT(kept, 0u);

@@ -81,6 +81,14 @@ constexpr int kStatueSubdivision = 8; // 768 triangles: worth a test
 constexpr std::uint64_t kWallTriangles = 12;
 constexpr std::uint64_t kStatueTriangles = 12 * kStatueSubdivision * kStatueSubdivision;
 
+/** Format 1, for the tests that measured it until they are ported to format 2 (issue 16:
+ *  version 1 is to be refused). */
+builder::BuildOptions formatOne() {
+    builder::BuildOptions options;
+    options.formatVersion = storage::kFormatVersion;
+    return options;
+}
+
 /** Builds `file` with what `fill` adds, within the smallest memory budget. */
 template <typename Fill>
 fs::path buildScene(const fs::path& file, Fill&& fill, builder::BuildOptions options = {}) {
@@ -272,7 +280,7 @@ TEST_P(BothBackends, AFrameWithoutHistoryStopsTestingWhereNothingDrawnToDepthIsH
     // each group of trees is worth a test (1,346 tests before this rule); once the
     // frame's answers keep finding everything visible while nothing new is drawn to depth,
     // the groups left are drawn untested (OcclusionTraversal.cpp, kPriorHiddenShare).
-    open(buildGenerated(freshDir(), "forest:trees=4096"));
+    open(buildGenerated(freshDir(), "forest:trees=4096", formatOne()));
     const Camera camera = Camera::orbit(mBounds, 5.0f, 30.0f, 20.0f, 0.8f);
     auto reference = mPlain->render(frame(camera, 1.0f, false));
     ASSERT_TRUE(reference.isOk()) << reference.status().toString();
@@ -338,7 +346,7 @@ TEST_P(BothBackends, OpaqueCubesOcclude) {
 }
 
 TEST_F(OcclusionCullingTest, TheOracleDrawsExactlyWhatShows) {
-    open(buildWallAndStatue(freshDir()));
+    open(buildWallAndStatue(freshDir(), formatOne()));
     const Camera front = Camera::lookAt({0, 0, 12}, {0, 0, 0}, {0, 1, 0}, 0.8f);
     auto reference = mPlain->render(frame(front, 1.0f, false));
     ASSERT_TRUE(reference.isOk());
@@ -357,7 +365,7 @@ TEST_F(OcclusionCullingTest, TheOracleDrawsExactlyWhatShows) {
 TEST_F(OcclusionCullingTest, TheOracleDropsCubesBehindOpaqueGeometry) {
     // At ε = 64 the statue (about 60 pixels wide) is drawn as cubes, the wall as its triangles:
     // cubes write no depth, but the wall's hides them all.
-    open(buildWallAndStatue(freshDir()));
+    open(buildWallAndStatue(freshDir(), formatOne()));
     const Camera front = Camera::lookAt({0, 0, 12}, {0, 0, 0}, {0, 1, 0}, 0.8f);
     auto reference = mPlain->render(frame(front, 64.0f, false));
     ASSERT_TRUE(reference.isOk());

@@ -100,6 +100,8 @@ std::unique_ptr<storage::SceneFile>
 buildGenerated(const fs::path& file, const std::string& generator) {
     builder::BuildOptions options;
     options.memoryBudgetBytes = builder::SceneBuilder::kMinimumBudgetBytes;
+    // Format 1 until this test is ported to format 2 (issue 16: version 1 is to be refused).
+    options.formatVersion = storage::kFormatVersion;
     auto sceneBuilder = builder::SceneBuilder::create(file, options);
     EXPECT_TRUE(sceneBuilder.isOk()) << sceneBuilder.status().toString();
     auto spec = builder::parseGeneratorSpec(generator);

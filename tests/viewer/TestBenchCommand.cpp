@@ -89,10 +89,13 @@ constexpr const char* kViewsScenario = R"({
   "sweep": {"parameter": "eps", "values": [1, 4]}
 })";
 
+// Format 1: with every page resident it reads nothing (format 2 is drawn through the cache);
+// until it is ported (issue 16: version 1 is to be refused).
 constexpr const char* kPathScenario = R"({
   "name": "tiny-path",
   "title": "A tiny path scenario",
   "kind": "path",
+  "build": ["--format", "1"],
   "scene": {"generate": "forest:trees=1"},
   "size": [64, 48],
   "path": {"generator": "orbit", "frames": 3},
@@ -388,7 +391,8 @@ TEST(BenchCommandTest, CodecScenarioEncodesTheLeavesOfABuildAndDecodesThemAgain)
 TEST(BenchCommandTest, ForestScenarioBuildsEveryForestWithItsFlags) {
     const fs::path dir = freshTestDir();
     const std::string forest = R"("kind": "forest", "trees": [1, 16], "sizes": [[64, 48]])";
-    writeText(dir / "tiny-forest.json", "{\"name\": \"tiny-forest\", " + forest + "}");
+    writeText(dir / "tiny-forest.json",
+              "{\"name\": \"tiny-forest\", " + forest + R"(, "build": ["--format", "1"]})");
     writeText(dir / "tiny-forest-v2.json",
               "{\"name\": \"tiny-forest-v2\", " + forest + R"(, "build": ["--format", "2"]})");
     const fs::path out = dir / "out";
@@ -407,7 +411,7 @@ TEST(BenchCommandTest, ForestScenarioBuildsEveryForestWithItsFlags) {
     }
     EXPECT_LE(std::stod(cell(two, 2, "triangles_drawn")), 1.25 * std::stod(cell(one, 2, "triangles_drawn")));
     EXPECT_NE(readText(out / "tiny-forest-v2.md").find("built with `--format 2`"), std::string::npos);
-    EXPECT_EQ(readText(out / "tiny-forest.md").find("built with"), std::string::npos);
+    EXPECT_NE(readText(out / "tiny-forest.md").find("built with `--format 1`"), std::string::npos);
 }
 
 constexpr const char* kReplayScenario = R"({

@@ -19,10 +19,13 @@ namespace {
 namespace fs = std::filesystem;
 using json = nlohmann::json;
 
-fs::path buildForest(const fs::path& dir, const std::string& pageSize = "16KiB") {
+/** `format`: "1" for the tests that measured format 1, until they are ported to format 2
+ *  (issue 16: version 1 is to be refused). */
+fs::path buildForest(const fs::path& dir, const std::string& pageSize = "16KiB", const std::string& format = "2") {
     const fs::path scene = dir / "forest.ffs";
-    const ProcessResult built = runFarfield(
-            {"build", "-q", "--generate", "forest:trees=16", "--page-size", pageSize, "-o", scene.string()}, dir);
+    const ProcessResult built = runFarfield({"build", "-q", "--generate", "forest:trees=16", "--page-size", pageSize,
+                                             "--format", format, "-o", scene.string()},
+                                            dir);
     EXPECT_EQ(built.exitCode, 0) << built.describe();
     return scene;
 }
@@ -78,7 +81,7 @@ TEST(ReplayCommandTest, ResidentBytesStayWithinTheBudgetAlongAPath) {
 // the view needs, every teleport's segment converges and is counted.
 TEST(ReplayCommandTest, ASegmentThatNeverConvergesIsReportedAsSuch) {
     const fs::path dir = freshTestDir();
-    const fs::path scene = buildForest(dir);
+    const fs::path scene = buildForest(dir, "16KiB", "1");
     const fs::path orbit = makePath(dir, scene, "orbit", 12);
     const fs::path starved = dir / "starved.json";
     ASSERT_EQ(runFarfield({"replay", scene.string(), orbit.string(), "--cache-mb", "1", "--size", "160x120",
@@ -114,7 +117,7 @@ TEST(ReplayCommandTest, ASegmentThatNeverConvergesIsReportedAsSuch) {
 // reading (measured when written: nothing read after frame 6 of 40; orbit over_fetch 1.05).
 TEST(ReplayCommandTest, AtTheBudgetsEdgeAFrameKeepsItsCutInsteadOfReadingWhatItMustDrop) {
     const fs::path dir = freshTestDir();
-    const fs::path scene = buildForest(dir);
+    const fs::path scene = buildForest(dir, "16KiB", "1");
     const fs::path orbit = makePath(dir, scene, "orbit", 24);
     const json orbitPath = readJsonFile(orbit);
     ASSERT_TRUE(orbitPath.is_object());
@@ -184,7 +187,7 @@ TEST(ReplayCommandTest, TerrainWorkingSetGrowsFarSlowerThanTheScene) {
         const fs::path scene = dir / (std::string("terrain-") + triangles + ".ffs");
         const ProcessResult built = runFarfield(
                 {"build", "-q", "--generate", std::string("terrain:triangles=") + triangles, "--page-size", "16KiB",
-                 "-o", scene.string()},
+                 "--format", "1", "-o", scene.string()}, // format 1 until ported (issue 16)
                 dir);
         ASSERT_EQ(built.exitCode, 0) << built.describe();
         const fs::path path = makePath(dir, scene, "orbit", 1);
@@ -278,7 +281,7 @@ TEST(ReplayCommandTest, BudgetBelowTheRootPageIsRefused) {
 
 TEST(ReplayCommandTest, ACorruptPageFailsOnlyItsSubtree) {
     const fs::path dir = freshTestDir();
-    const fs::path scene = buildForest(dir, "4KiB");
+    const fs::path scene = buildForest(dir, "4KiB", "1");
     const fs::path path = makePath(dir, scene, "orbit", 6);
     // Damage the page holding the tree prototype's root: every tree that is refined needs it.
     const auto file = storage::SceneFile::open(scene);

@@ -6,6 +6,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cstdint>
 #include <filesystem>
 #include <regex>
@@ -26,6 +27,10 @@ bool exitedWith(const ProcessResult& r, int code) {
 
 /** Builds `args` (a generator or a glTF file) into dir/scene.ffs with dir/report.json. */
 fs::path buildScene(const fs::path& dir, std::vector<std::string> args) {
+    // Format 1 unless asked: these tests read its statistics (`--paths`, bytes per
+    // representation), until they are ported to format 2 (issue 16: version 1 is to be refused).
+    if (std::find(args.begin(), args.end(), "--format") == args.end())
+        args.insert(args.begin(), {"--format", "1"});
     args.insert(args.begin(), {"build", "-q"});
     args.insert(
             args.end(),
