@@ -21,7 +21,7 @@ struct PrototypeCount {
 /** What the builder knows about a scene once the scan is done. */
 struct PageSizeInputs {
     std::vector<PrototypeCount> prototypes; ///< empty ones (no triangles) included
-    std::uint32_t formatVersion = 1;        ///< what the file is written as (storage::kFormatVersion*)
+    std::uint32_t formatVersion = 2;        ///< what the file is written as (storage::kFormatVersion*)
 };
 
 /** Payload bytes the scene will need, estimated from its counts (triangles, node records,

@@ -41,7 +41,7 @@ struct BuildArgs {
     std::string report;
     std::string tempDirectory;
     std::string spill = "compact";
-    unsigned format = 1;
+    unsigned format = 2;
     std::optional<std::uint64_t> clusterLeafTriangles; ///< unset: HierarchyParams::leavesFor()
     bool clusterNodes = false;   ///< --cluster-nodes: every prototype placed once
     bool noClusterNodes = false; ///< --no-cluster-nodes: none; neither: by size
@@ -221,8 +221,9 @@ CommandRunner addBuildCommand(CLI::App& app) {
             ->check(CLI::IsMember({"compact", "raw"}))
             ->capture_default_str();
     cmd->add_option("--format", args->format,
-                    "Scene file format: 1 or 2 (compact clusters and 48-byte records, storage/FORMAT.md; drawn "
-                    "through the page cache, which decodes its clusters)")
+                    "Scene file format: 2 (compact clusters and 48-byte records, storage/FORMAT.md; drawn through "
+                    "the page cache, which decodes its clusters) or 1 (96-byte records and 60-byte triangles; to "
+                    "be refused)")
             ->check(CLI::IsMember({1u, 2u}))
             ->capture_default_str();
     cmd->add_option("--cluster-leaf-triangles", args->clusterLeafTriangles,

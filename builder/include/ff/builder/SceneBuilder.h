@@ -59,9 +59,10 @@ struct BuildOptions {
      *  default, wrote 2.5x fewer bytes on the 200 M terrain for 6 % more time; raw costs no
      *  encoding time. */
     SpillCodec spillCodec = SpillCodec::Compact;
-    /** storage::kFormatVersion (the default) or kFormatVersion2 (`farfield build --format 2`:
-     *  compact clusters and 48-byte records). The runtime draws both. */
-    std::uint32_t formatVersion = storage::kFormatVersion;
+    /** storage::kFormatVersion2 (the default: compact clusters and 48-byte records) or
+     *  kFormatVersion (`farfield build --format 1`, kept until version 1 is refused). The runtime
+     *  draws both. */
+    std::uint32_t formatVersion = storage::kFormatVersion2;
     /** Applied to every instance before anything else: moves and scales the whole input in the
      *  world (`farfield build --offset/--scale`). */
     glm::dmat4 placement{1.0};
